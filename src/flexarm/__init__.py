@@ -1,0 +1,11 @@
+"""flexarm: model, simulate, control and identify flexible robot manipulators."""
+
+from __future__ import annotations
+
+from .arm import FlexibleArm
+from .link import Link
+from .modes import BeamModes
+
+__all__ = ["BeamModes", "FlexibleArm", "Link", "__version__"]
+
+__version__ = "0.1.0"

@@ -1,0 +1,121 @@
+"""Input checks shared by every public constructor and function.
+
+Every message names the parameter, the owner, what was expected and what was
+got, in one format::
+
+    The 'length' parameter of Link must be > 0. Got -1.0 instead.
+
+Wrong types raise :class:`TypeError`; wrong values or shapes raise
+:class:`ValueError`.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "check_array",
+    "check_int",
+    "check_option",
+    "check_real",
+]
+
+
+def _fail(name: str, owner: str, expected: str, got: Any) -> str:
+    return f"The '{name}' parameter of {owner} must be {expected}. Got {got!r} instead."
+
+
+def check_real(
+    value: Any,
+    name: str,
+    owner: str,
+    *,
+    positive: bool = False,
+    nonnegative: bool = False,
+) -> float:
+    """Return ``value`` as a finite Python float, or raise.
+
+    Parameters
+    ----------
+    value : Any
+        The candidate number. Booleans are rejected (they are numbers in Python
+        only by accident).
+    name, owner : str
+        Parameter and owner named in the error message.
+    positive, nonnegative : bool
+        Require ``value > 0`` or ``value >= 0``.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "fiu":
+            value = value.item()
+        else:
+            raise TypeError(_fail(name, owner, "a real number", value))
+    x = float(value)
+    if not math.isfinite(x):
+        raise ValueError(_fail(name, owner, "finite", x))
+    if positive and not x > 0.0:
+        raise ValueError(_fail(name, owner, "> 0", x))
+    if nonnegative and not x >= 0.0:
+        raise ValueError(_fail(name, owner, ">= 0", x))
+    return x
+
+
+def check_int(value: Any, name: str, owner: str, *, minimum: int | None = None) -> int:
+    """Return ``value`` as a Python int (no silent truncation of floats), or raise."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(_fail(name, owner, "an integer", value))
+    n = int(value)
+    if minimum is not None and n < minimum:
+        raise ValueError(_fail(name, owner, f">= {minimum}", n))
+    return n
+
+
+def check_option(value: Any, name: str, owner: str, options: Iterable[str]) -> str:
+    """Return ``value`` if it is one of ``options``, or raise naming them all."""
+    opts = tuple(options)
+    if not isinstance(value, str):
+        raise TypeError(_fail(name, owner, f"a str, one of {opts}", value))
+    if value not in opts:
+        raise ValueError(_fail(name, owner, f"one of {opts}", value))
+    return value
+
+
+def check_array(
+    value: ArrayLike,
+    name: str,
+    owner: str,
+    *,
+    shape: tuple[int, ...] | None = None,
+    finite: bool = True,
+    dtype: type = float,
+) -> NDArray[Any]:
+    """Return ``value`` as a NumPy array of ``dtype`` with the given shape, or raise.
+
+    ``shape`` entries of ``-1`` accept any length along that axis. Complex input
+    is kept complex when ``dtype`` is float (the complex-step derivatives of the
+    mass matrix rely on it).
+    """
+    try:
+        arr = np.asarray(value)
+    except Exception as exc:  # pragma: no cover - numpy raises many types here
+        raise TypeError(_fail(name, owner, "array-like", type(value).__name__)) from exc
+    if arr.dtype.kind not in "biufc":
+        raise TypeError(_fail(name, owner, "a numeric array", f"dtype {arr.dtype}"))
+    if arr.dtype.kind != "c":
+        arr = arr.astype(dtype, copy=False)
+    if shape is not None:
+        ok = arr.ndim == len(shape) and all(
+            s == -1 or s == a for s, a in zip(shape, arr.shape, strict=True)
+        )
+        if not ok:
+            want = "(" + ", ".join("any" if s == -1 else str(s) for s in shape) + ")"
+            raise ValueError(_fail(name, owner, f"of shape {want}", f"shape {arr.shape}"))
+    if finite and not np.all(np.isfinite(arr)):
+        raise ValueError(_fail(name, owner, "finite (no NaN or inf)", "non-finite entries"))
+    return arr

@@ -1,0 +1,613 @@
+r"""The planar multi-link arm with flexible links: :class:`FlexibleArm`.
+
+Model
+-----
+Links are uniform Euler–Bernoulli beams moving in a horizontal plane (no
+gravity). Link ``i`` (0-based) has a clamped frame at its joint, at absolute
+angle
+
+.. math:: \alpha_i = \sum_{k \le i} \theta_k + \sum_{k < i} w_k'(L_k),
+
+i.e. joint ``i`` turns link ``i`` relative to the *deflected* tip of link
+``i-1`` (the motor's stator sits there). A point at distance ``x`` along link
+``i`` is at
+
+.. math:: p_i(x) = o_i + R(\alpha_i) \, [x,\ w_i(x)]^T, \qquad
+          w_i(x) = \sum_j \phi_{ij}(x) \delta_{ij},
+
+with ``o_0 = 0`` and ``o_{i+1} = p_i(L_i)``: small deflections enter the
+kinematics linearly in the link's own frame (no axial shortening), as in the
+closed-form model of De Luca & Siciliano (IEEE SMC 1991). The Lagrangian is
+built from this one kinematic map with no further truncation,
+``T = 1/2 \int |\dot p|^2 dm`` plus the rotary inertia of hubs and payload and
+``V = 1/2 \sum EI \int w''^2``, so the equations of motion
+
+.. math:: M(q) \ddot q + C(q, \dot q) \dot q + K q + D \dot q = B \tau
+
+conserve ``T + V`` exactly when ``tau = 0`` and ``D = 0``.
+
+Coordinates ``q = (theta_1..theta_N, delta_1, ..., delta_N)``: joint angles
+(rad), then every link's modal coordinates in link order.
+
+Hubs and payload: ``Link.hub_inertia`` turns with its link; ``Link.hub_mass``
+is a point mass at the joint, carried by the previous link's tip. The payload
+is a point mass with rotary inertia at the last tip, turning with the tip
+slope.
+
+Boundary conditions of the assumed modes (``boundary``):
+``"clamped-free"`` uses cantilever modes for every link. ``"clamped-mass"``
+clamps link ``i`` at its joint and loads its tip with the mass and rotary
+inertia of everything outboard: all outboard beams, hubs and the payload, with
+the outboard chain straight (joint angles zero) and its inertia taken about
+the tip of link ``i``.
+
+Computation
+-----------
+For link ``i`` the body velocity ``nu = (u, alpha_dot, delta_dot)`` (``u`` the
+joint's velocity in the link frame) is ``Jb_i(q) qdot``, and the link's kinetic
+energy is ``1/2 nu' Mb_i(delta) nu`` with the modal integrals of
+:class:`flexarm.modes.BeamModes`. Then ``M = sum Jb' Mb Jb``, and by
+d'Alembert the velocity terms are ``C qdot = sum Jb' beta``, ``beta`` being the
+body-frame inertial force at ``qddot = 0``. :meth:`FlexibleArm.coriolis`
+returns the Christoffel matrix (``Mdot - 2C`` skew-symmetric) built from exact
+complex-step derivatives of ``M``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from . import kernels
+from ._validation import check_array, check_int, check_option, check_real
+from .link import Link
+from .modes import NORMALIZATIONS, BeamModes
+
+__all__ = ["BOUNDARIES", "FlexibleArm"]
+
+BOUNDARIES = ("clamped-free", "clamped-mass")
+
+_OWNER = "FlexibleArm"
+
+
+@dataclass(frozen=True)
+class FlexibleArm:
+    """A planar arm of ``N >= 1`` flexible links on revolute joints.
+
+    Parameters
+    ----------
+    links : sequence of Link
+        From the base outwards.
+    payload_mass : float
+        Point mass at the last tip, kg (>= 0).
+    payload_inertia : float
+        Rotary inertia of the payload about the tip, kg m**2 (>= 0).
+    boundary : {"clamped-free", "clamped-mass"}
+        Boundary conditions of the assumed modes (module docstring).
+    joints : None
+        Rigid joints. Flexible joints are not available yet.
+    mode_normalization : {"mass", "amplitude", "tip"}
+        Scaling of the mode shapes (:mod:`flexarm.modes`); default ``"mass"``.
+    mode_amplitude : float
+        The paper's ``A`` when ``mode_normalization="amplitude"``.
+
+    Examples
+    --------
+    >>> arm = FlexibleArm.paper()
+    >>> arm.n_dof
+    4
+    >>> round(float(arm.link_frequencies[0][0]), 3)
+    12.281
+    """
+
+    links: Sequence[Link]
+    payload_mass: float = 0.0
+    payload_inertia: float = 0.0
+    boundary: str = "clamped-free"
+    joints: None = None
+    mode_normalization: str = "mass"
+    mode_amplitude: float = 0.1
+    _derived: dict[str, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        links = self.links
+        if isinstance(links, Link):
+            links = (links,)
+        if not isinstance(links, Sequence) or isinstance(links, str):
+            raise TypeError(
+                f"The 'links' parameter of {_OWNER} must be a sequence of Link. "
+                f"Got {type(links).__name__} instead."
+            )
+        links = tuple(links)
+        if len(links) == 0:
+            raise ValueError(f"The 'links' parameter of {_OWNER} must hold >= 1 Link. Got 0 instead.")
+        for k, lk in enumerate(links):
+            if not isinstance(lk, Link):
+                raise TypeError(
+                    f"The 'links' parameter of {_OWNER} must hold Link objects. "
+                    f"Got {type(lk).__name__} at position {k} instead."
+                )
+        set_(self, "links", links)
+        for name in ("payload_mass", "payload_inertia"):
+            set_(self, name, check_real(getattr(self, name), name, _OWNER, nonnegative=True))
+        check_option(self.boundary, "boundary", _OWNER, BOUNDARIES)
+        if self.joints is not None:
+            raise NotImplementedError(
+                "The 'joints' parameter of FlexibleArm must be None: flexible joints "
+                "are not implemented yet."
+            )
+        check_option(self.mode_normalization, "mode_normalization", _OWNER, NORMALIZATIONS)
+        set_(
+            self,
+            "mode_amplitude",
+            check_real(self.mode_amplitude, "mode_amplitude", _OWNER, positive=True),
+        )
+        modes = tuple(
+            BeamModes(
+                lk.length,
+                lk.flexural_rigidity,
+                lk.linear_density,
+                lk.n_modes,
+                tip_mass=tm,
+                tip_inertia=tj,
+                normalization=self.mode_normalization,
+                amplitude=self.mode_amplitude,
+            )
+            for lk, (tm, tj) in zip(links, self._tip_loads(), strict=True)
+        )
+        self._derived["modes"] = modes
+        self._derived["arrays"] = self._pack()
+
+    # ------------------------------------------------------------ construction
+    @classmethod
+    def paper(cls, **overrides: Any) -> FlexibleArm:
+        """The arm of Sasiadek et al. (2014): two links of 4.5 m, ``EI = 1676 N m**2``,
+        ``rho = 0.335 kg/m``, one clamped-free mode each, no hubs or payload.
+
+        Keyword arguments override :class:`FlexibleArm` parameters; ``n_modes``
+        overrides the modes kept per link.
+        """
+        n_modes = overrides.pop("n_modes", 1)
+        link = Link(4.5, 1676.0, 0.335, n_modes=n_modes)
+        return cls(links=(link, link), **overrides)
+
+    def _tip_loads(self) -> list[tuple[float, float]]:
+        """Tip mass and inertia (about the tip) loading each link's modes."""
+        links = self.links
+        if self.boundary == "clamped-free":
+            return [(0.0, 0.0)] * len(links)
+        loads = []
+        for i in range(len(links)):
+            mass = self.payload_mass
+            inertia = self.payload_inertia
+            d = 0.0  # distance from tip i to the base of the next outboard link
+            for lk in links[i + 1 :]:
+                mass += lk.hub_mass + lk.mass
+                inertia += lk.hub_mass * d**2 + lk.hub_inertia
+                inertia += lk.linear_density * ((d + lk.length) ** 3 - d**3) / 3.0
+                d += lk.length
+            inertia += self.payload_mass * d**2
+            loads.append((mass, inertia))
+        return loads
+
+    def _pack(self) -> kernels.ArmArrays:
+        n, N = self.n_dof, self.n_links
+        start = np.zeros(N + 1, dtype=np.int64)
+        start[0] = N
+        for i, lk in enumerate(self.links):
+            start[i + 1] = start[i] + lk.n_modes
+        link = np.zeros((N, kernels.N_LINK_COLUMNS))
+        v, w, h, g = (np.zeros(n) for _ in range(4))
+        md = np.zeros((n, n))
+        k, d = np.zeros(n), np.zeros(n)
+        for i, (lk, bm) in enumerate(zip(self.links, self.modes, strict=True)):
+            L, rho = lk.length, lk.linear_density
+            link[i] = (L, rho * L, rho * L**2 / 2, rho * L**3 / 3 + lk.hub_inertia, lk.hub_mass)
+            s = slice(start[i], start[i + 1])
+            v[s], w[s] = bm.mass_integral, bm.moment_integral
+            h[s], g[s] = bm.tip_deflection, bm.tip_slope
+            md[s, s] = bm.modal_mass
+            k[s] = np.diag(bm.modal_stiffness)
+            d[s] = 2.0 * lk.modal_damping * bm.frequencies * np.diag(bm.generalized_mass)
+        arrays = kernels.ArmArrays(
+            start, link, v, w, h, g, md, k, d, np.array([self.payload_mass, self.payload_inertia])
+        )
+        for a in arrays:
+            a.flags.writeable = False
+        return arrays
+
+    # -------------------------------------------------------------- structure
+    @property
+    def n_links(self) -> int:
+        return len(self.links)
+
+    @property
+    def n_modes(self) -> tuple[int, ...]:
+        """Modes kept per link."""
+        return tuple(lk.n_modes for lk in self.links)
+
+    @property
+    def n_dof(self) -> int:
+        """Number of generalised coordinates: joint angles plus all modal coordinates."""
+        return self.n_links + sum(self.n_modes)
+
+    @property
+    def modes(self) -> tuple[BeamModes, ...]:
+        """The assumed modes of each link (with this arm's boundary conditions)."""
+        return self._derived["modes"]  # type: ignore[no-any-return]
+
+    @property
+    def arrays(self) -> kernels.ArmArrays:
+        """The arm packed for the compiled kernels (read-only arrays)."""
+        return self._derived["arrays"]  # type: ignore[no-any-return]
+
+    @property
+    def link_frequencies(self) -> list[NDArray[np.float64]]:
+        """Clamped natural frequencies of each link's modes, rad/s."""
+        return [bm.frequencies for bm in self.modes]
+
+    def modal_slice(self, link: int) -> slice:
+        """Indices in ``q`` of link ``link``'s modal coordinates (0-based link)."""
+        link = self._check_link(link)
+        s = self.arrays.mode_start
+        return slice(int(s[link]), int(s[link + 1]))
+
+    @property
+    def coordinate_names(self) -> list[str]:
+        """Names of the coordinates in ``q``: ``theta1``, ..., ``delta2_1`` (link, mode)."""
+        names = [f"theta{i + 1}" for i in range(self.n_links)]
+        for i, nm in enumerate(self.n_modes):
+            names += [f"delta{i + 1}_{j + 1}" for j in range(nm)]
+        return names
+
+    @property
+    def stiffness_matrix(self) -> NDArray[np.float64]:
+        """``K = blockdiag(0, modal stiffness)``, shape ``(n_dof, n_dof)``."""
+        return np.diag(self.arrays.stiffness)
+
+    @property
+    def damping_matrix(self) -> NDArray[np.float64]:
+        """Modal damping ``D``, shape ``(n_dof, n_dof)``, N m s."""
+        return np.diag(self.arrays.damping)
+
+    @property
+    def input_matrix(self) -> NDArray[np.float64]:
+        """``B = [I; 0]``, shape ``(n_dof, n_links)``: joint torques act on the joint angles."""
+        b = np.zeros((self.n_dof, self.n_links))
+        b[: self.n_links] = np.eye(self.n_links)
+        return b
+
+    # ------------------------------------------------------------- validation
+    def _check_link(self, link: int) -> int:
+        link = check_int(link, "link", _OWNER, minimum=0)
+        if link >= self.n_links:
+            raise ValueError(
+                f"The 'link' parameter of {_OWNER} must be < {self.n_links} (0-based). "
+                f"Got {link} instead."
+            )
+        return link
+
+    def _check_q(self, q: ArrayLike, name: str = "q") -> NDArray[Any]:
+        return check_array(q, name, _OWNER, shape=(self.n_dof,))
+
+    def _check_batch_q(self, q: ArrayLike) -> NDArray[Any]:
+        arr = check_array(q, "q", _OWNER)
+        if arr.ndim not in (1, 2) or arr.shape[-1] != self.n_dof:
+            raise ValueError(
+                f"The 'q' parameter of {_OWNER} must be of shape ({self.n_dof},) or "
+                f"(m, {self.n_dof}). Got shape {arr.shape} instead."
+            )
+        return arr
+
+    # --------------------------------------------------- body Jacobians (NumPy)
+    def _body_terms(
+        self, q: NDArray[Any], dq: NDArray[Any] | None
+    ) -> list[tuple[Any, ...]]:
+        """Per body: (Jb, Mb, beta) with ``T = 1/2 (Jb dq)' Mb (Jb dq)`` and the
+        inertial force ``Jb' beta`` at ``qddot = 0`` (``beta`` is None when
+        ``dq`` is None). Works for real and complex ``q`` (complex step)."""
+        n, N = self.n_dof, self.n_links
+        dtype = np.result_type(q, float)
+        a = self.arrays
+        U = np.zeros((2, n), dtype=dtype)  # velocity Jacobian of the current joint, link frame
+        A = np.zeros(n)  # gradient of the link's absolute angle (constant)
+        b = np.zeros(2, dtype=dtype)  # inertial acceleration of the joint at qddot = 0
+        bodies: list[tuple[Any, ...]] = []
+        ad = 0.0
+        for i in range(N):
+            s = self.modal_slice(i)
+            if i > 0:
+                prev = self.modal_slice(i - 1)
+                gamma = q[i] + a.tip_slope[prev] @ q[prev]
+                Rt = np.array([[np.cos(gamma), np.sin(gamma)], [-np.sin(gamma), np.cos(gamma)]])
+                U, b = Rt @ U, Rt @ b
+                A = A.copy()
+                A[prev] += a.tip_slope[prev]
+                mh = self.links[i].hub_mass
+                bodies.append((U.copy(), mh * np.eye(2), None if dq is None else mh * b))
+            A = A.copy()
+            A[i] += 1.0
+            L, m, cx, ia, _ = a.link[i]
+            delta = q[s]
+            v, w, mdelta = a.mass_integral[s], a.moment_integral[s], a.modal_mass[s, s]
+            nm = delta.shape[0]
+            D = np.zeros((nm, n))
+            D[:, s] = np.eye(nm)
+            Jb = np.vstack([U, A[None, :], D])
+            Mb = np.zeros((3 + nm, 3 + nm), dtype=dtype)
+            Mb[0, 0] = Mb[1, 1] = m
+            Mb[0, 2] = Mb[2, 0] = -(v @ delta)
+            Mb[1, 2] = Mb[2, 1] = cx
+            Mb[1, 3:] = Mb[3:, 1] = v
+            Mb[2, 2] = ia + delta @ mdelta @ delta
+            Mb[2, 3:] = Mb[3:, 2] = w
+            Mb[3:, 3:] = mdelta
+            beta = None
+            e = a.tip_deflection[s] @ delta
+            if dq is not None:
+                ad = A @ dq
+                dd = dq[s]
+                beta = np.concatenate(
+                    [
+                        [m * b[0] - ad**2 * cx - 2 * ad * (v @ dd)],
+                        [m * b[1] - ad**2 * (v @ delta)],
+                        [-b[0] * (v @ delta) + 2 * ad * (delta @ mdelta @ dd) + cx * b[1]],
+                        v * b[1] - ad**2 * (mdelta @ delta),
+                    ]
+                )
+                ed = a.tip_deflection[s] @ dd
+                b = b + np.array([-(ad**2) * L - 2 * ad * ed, -(ad**2) * e])
+            bodies.append((Jb, Mb, beta))
+            U = U + np.vstack([-e * A, L * A])
+            U[1, s] += a.tip_deflection[s]
+        s = self.modal_slice(N - 1)
+        Ap = A.copy()
+        Ap[s] += a.tip_slope[s]
+        mp, jp = self.payload_mass, self.payload_inertia
+        bodies.append((U.copy(), mp * np.eye(2), None if dq is None else mp * b))
+        bodies.append((Ap[None, :], np.array([[jp]]), None if dq is None else np.zeros(1)))
+        return bodies
+
+    # ---------------------------------------------------------------- dynamics
+    def mass_matrix(self, q: ArrayLike) -> NDArray[Any]:
+        """Mass matrix ``M(q)``, shape ``(n_dof, n_dof)``, symmetric positive definite.
+
+        Parameters
+        ----------
+        q : array_like, shape (n_dof,)
+            Coordinates (joint angles in rad, then modal coordinates). Complex
+            values are accepted (used for complex-step derivatives).
+        """
+        q = self._check_q(q)
+        M = sum(Jb.T @ Mb @ Jb for Jb, Mb, _ in self._body_terms(q, None))
+        return 0.5 * (M + M.T)  # type: ignore[no-any-return]
+
+    def velocity_terms(self, q: ArrayLike, dq: ArrayLike) -> NDArray[np.float64]:
+        """Centrifugal and Coriolis forces ``C(q, dq) dq``, shape ``(n_dof,)``."""
+        q, dq = self._check_q(q), self._check_q(dq, "dq")
+        return sum(Jb.T @ beta for Jb, _, beta in self._body_terms(q, dq))  # type: ignore[no-any-return]
+
+    def mass_matrix_derivatives(self, q: ArrayLike) -> NDArray[np.float64]:
+        """``dM/dq_k`` for every ``k``, shape ``(n_dof, n_dof, n_dof)`` (k first),
+        by complex-step differentiation (exact to rounding)."""
+        q = self._check_q(q).real
+        step = 1e-30
+        out = np.empty((self.n_dof, self.n_dof, self.n_dof))
+        for k in range(self.n_dof):
+            qc = q.astype(complex)
+            qc[k] += 1j * step
+            out[k] = self.mass_matrix(qc).imag / step
+        return out
+
+    def coriolis(self, q: ArrayLike, dq: ArrayLike) -> NDArray[np.float64]:
+        """The Coriolis matrix ``C(q, dq)`` from Christoffel symbols of the first kind.
+
+        ``C(q, dq) dq`` equals :meth:`velocity_terms` and ``Mdot - 2 C`` is
+        skew-symmetric. Shape ``(n_dof, n_dof)``.
+        """
+        q, dq = self._check_q(q), self._check_q(dq, "dq")
+        dM = self.mass_matrix_derivatives(q)  # dM[i, k, j] = dM_kj / dq_i
+        # C_kj = sum_i 1/2 (dM_kj/dq_i + dM_ki/dq_j - dM_ij/dq_k) dq_i
+        t1 = np.einsum("ikj,i->kj", dM, dq)
+        t2 = np.einsum("jki,i->kj", dM, dq)
+        t3 = np.einsum("kij,i->kj", dM, dq)
+        return 0.5 * (t1 + t2 - t3)  # type: ignore[no-any-return]
+
+    def generalized_forces(self, q: NDArray[Any], dq: NDArray[Any], tau: NDArray[Any]) -> NDArray[Any]:
+        """``B tau - K q - D dq``, shape ``(n_dof,)``."""
+        out = -self.arrays.stiffness * q - self.arrays.damping * dq
+        out[: self.n_links] += tau
+        return out  # type: ignore[no-any-return]
+
+    def forward_dynamics(
+        self, q: ArrayLike, dq: ArrayLike, tau: ArrayLike, *, backend: str = "numpy"
+    ) -> NDArray[np.float64]:
+        """Accelerations ``qddot = M^-1 (B tau - C dq - K q - D dq)``.
+
+        Parameters
+        ----------
+        q, dq : array_like, shape (n_dof,)
+            Coordinates and rates (rad, rad/s; modal units).
+        tau : array_like, shape (n_links,)
+            Joint torques, N m.
+        backend : {"numpy", "compiled"}
+            ``"numpy"`` is the readable reference; ``"compiled"`` calls the Numba
+            kernel :func:`flexarm.kernels.forward_dynamics` (compiled on first use,
+            cached on disk).
+
+        Returns
+        -------
+        ndarray, shape (n_dof,)
+        """
+        check_option(backend, "backend", _OWNER, ("numpy", "compiled"))
+        q, dq = self._check_q(q), self._check_q(dq, "dq")
+        tau = check_array(tau, "tau", _OWNER, shape=(self.n_links,))
+        if backend == "compiled":
+            ws = kernels.make_workspace(self.n_dof)
+            ddq = np.empty(self.n_dof)
+            kernels.forward_dynamics(
+                np.ascontiguousarray(q, dtype=float),
+                np.ascontiguousarray(dq, dtype=float),
+                np.ascontiguousarray(tau, dtype=float),
+                self.arrays,
+                ws,
+                ddq,
+            )
+            return ddq
+        rhs = self.generalized_forces(q, dq, tau) - self.velocity_terms(q, dq)
+        return np.linalg.solve(self.mass_matrix(q), rhs)  # type: ignore[no-any-return]
+
+    def energy(self, q: ArrayLike, dq: ArrayLike) -> tuple[float, float]:
+        """Kinetic and potential (elastic) energy in J."""
+        q, dq = self._check_q(q), self._check_q(dq, "dq")
+        kinetic = 0.5 * dq @ self.mass_matrix(q) @ dq
+        potential = 0.5 * q @ (self.arrays.stiffness * q)
+        return float(kinetic), float(potential)
+
+    # -------------------------------------------------------------- kinematics
+    def point_position(self, q: ArrayLike, link: int, distance: float) -> NDArray[np.float64]:
+        """Position of the point ``distance`` m along link ``link``, deflection included.
+
+        Parameters
+        ----------
+        q : array_like, shape (n_dof,) or (m, n_dof)
+            One configuration or a time series of them.
+        link : int
+            0-based link index.
+        distance : float
+            Distance from the link's joint along the undeformed link, m, in
+            ``[0, L]``.
+
+        Returns
+        -------
+        ndarray, shape (2,) or (m, 2)
+            ``(x, y)`` in m, base frame.
+        """
+        link = self._check_link(link)
+        L = self.links[link].length
+        distance = check_real(distance, "distance", _OWNER)
+        if not 0.0 <= distance <= L:
+            raise ValueError(
+                f"The 'distance' parameter of {_OWNER} must lie in [0, {L}] for link {link}. "
+                f"Got {distance} instead."
+            )
+        q = self._check_batch_q(q)
+        qb = np.atleast_2d(q)
+        a = self.arrays
+        pos = np.zeros((qb.shape[0], 2))
+        alpha = np.zeros(qb.shape[0])
+        for i in range(link + 1):
+            s = self.modal_slice(i)
+            alpha = alpha + qb[:, i]
+            if i < link:
+                x, w = self.links[i].length, qb[:, s] @ a.tip_deflection[s]
+            else:
+                x = distance
+                phi = self.modes[i].shape(distance)[:, 0]
+                w = qb[:, s] @ phi
+            c, sn = np.cos(alpha), np.sin(alpha)
+            pos += np.column_stack([x * c - w * sn, x * sn + w * c])
+            alpha = alpha + qb[:, s] @ a.tip_slope[s]
+        return pos[0] if q.ndim == 1 else pos
+
+    def tip_position(self, q: ArrayLike) -> NDArray[np.float64]:
+        """End-effector position with deflection, shape ``(2,)`` or ``(m, 2)``, m."""
+        last = self.n_links - 1
+        return self.point_position(q, last, self.links[last].length)
+
+    def _check_theta(self, theta: ArrayLike) -> NDArray[np.float64]:
+        arr = check_array(theta, "theta", _OWNER)
+        if arr.ndim not in (1, 2) or arr.shape[-1] != self.n_links:
+            raise ValueError(
+                f"The 'theta' parameter of {_OWNER} must be of shape ({self.n_links},) or "
+                f"(m, {self.n_links}). Got shape {arr.shape} instead."
+            )
+        return arr
+
+    def forward_kinematics(self, theta: ArrayLike) -> NDArray[np.float64]:
+        """Rigid-link tip position from joint angles (deflections ignored).
+
+        Parameters
+        ----------
+        theta : array_like, shape (n_links,) or (m, n_links)
+            Joint angles, rad.
+
+        Returns
+        -------
+        ndarray, shape (2,) or (m, 2)
+            ``x = sum L_i cos(theta_1 + ... + theta_i)``, likewise ``y``; m.
+        """
+        theta = self._check_theta(theta)
+        lengths = np.array([lk.length for lk in self.links])
+        phi = np.cumsum(theta, axis=-1)
+        return np.stack([np.cos(phi) @ lengths, np.sin(phi) @ lengths], axis=-1)  # type: ignore[no-any-return]
+
+    def jacobian(self, theta: ArrayLike) -> NDArray[np.float64]:
+        """Rigid-link Jacobian ``d(x, y)/d theta``, shape ``(2, n_links)`` or
+        ``(m, 2, n_links)``, m/rad."""
+        theta = self._check_theta(theta)
+        lengths = np.array([lk.length for lk in self.links])
+        phi = np.cumsum(theta, axis=-1)
+        # column k: sum over i >= k of L_i (-sin phi_i, cos phi_i)
+        cx = np.flip(np.cumsum(np.flip(-lengths * np.sin(phi), -1), -1), -1)
+        cy = np.flip(np.cumsum(np.flip(lengths * np.cos(phi), -1), -1), -1)
+        return np.stack([cx, cy], axis=-2)  # type: ignore[no-any-return]
+
+    def inverse_kinematics(
+        self, position: ArrayLike, elbow: str = "positive"
+    ) -> NDArray[np.float64]:
+        """Joint angles of a two-link arm (rigid links) that put the tip at ``position``.
+
+        Parameters
+        ----------
+        position : array_like, shape (2,) or (m, 2)
+            Target ``(x, y)`` in m.
+        elbow : {"positive", "negative"}
+            The branch: the sign of ``theta_2``.
+
+        Returns
+        -------
+        ndarray, shape (2,) or (m, 2)
+            ``(theta_1, theta_2)`` in rad, ``theta_2`` in ``[0, pi]`` or ``[-pi, 0]``.
+
+        Raises
+        ------
+        ValueError
+            If the arm does not have two links or a target is out of reach.
+        """
+        if self.n_links != 2:
+            raise ValueError(
+                f"inverse_kinematics needs a two-link arm. Got {self.n_links} links instead."
+            )
+        check_option(elbow, "elbow", _OWNER, ("positive", "negative"))
+        p = check_array(position, "position", _OWNER)
+        if p.ndim not in (1, 2) or p.shape[-1] != 2:
+            raise ValueError(
+                f"The 'position' parameter of {_OWNER} must be of shape (2,) or (m, 2). "
+                f"Got shape {p.shape} instead."
+            )
+        l1, l2 = self.links[0].length, self.links[1].length
+        x, y = p[..., 0], p[..., 1]
+        r2 = x**2 + y**2
+        c2 = (r2 - l1**2 - l2**2) / (2 * l1 * l2)
+        tol = 1e-12
+        bad = (c2 > 1 + tol) | (c2 < -1 - tol)
+        if np.any(bad):
+            r = np.sqrt(np.atleast_1d(r2)[np.atleast_1d(bad)][0])
+            raise ValueError(
+                f"The 'position' parameter of {_OWNER} must be reachable, at a distance in "
+                f"[{abs(l1 - l2)}, {l1 + l2}] m from the base. Got a target at {r} m "
+                f"({int(np.sum(bad))} unreachable)."
+            )
+        c2 = np.clip(c2, -1.0, 1.0)
+        s2 = np.sqrt(1.0 - c2**2) * (1.0 if elbow == "positive" else -1.0)
+        t2 = np.arctan2(s2, c2)
+        t1 = np.arctan2(y, x) - np.arctan2(l2 * s2, l1 + l2 * c2)
+        t1 = (t1 + math.pi) % (2 * math.pi) - math.pi
+        return np.stack([t1, t2], axis=-1)  # type: ignore[no-any-return]

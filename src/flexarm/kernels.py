@@ -1,0 +1,269 @@
+"""Compiled dynamics of the flexible arm: plain arrays in, plain arrays out.
+
+These Numba functions are what the simulator calls millions of times. They take
+the packed model :class:`ArmArrays` (built once by
+:attr:`flexarm.FlexibleArm.arrays`) and a :class:`Workspace` allocated once, so
+a call allocates nothing. The readable NumPy implementation in
+:mod:`flexarm.arm` is their reference; the tests hold the two together.
+
+The model (see :mod:`flexarm.arm` for the derivation): the kinetic energy of
+link ``i`` in its clamped frame is ``1/2 nu' Mb(delta) nu`` with body velocity
+``nu = (u_x, u_y, alpha_dot, delta_dot) = Jb qdot``; ``M = sum Jb' Mb Jb`` and
+the velocity terms ``h = C(q, qdot) qdot = sum Jb' beta`` with ``beta`` the
+body-frame inertial force at ``qddot = 0``.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numba as nb
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "ArmArrays",
+    "Workspace",
+    "forward_dynamics",
+    "make_workspace",
+    "mass_and_bias",
+]
+
+F64 = NDArray[np.float64]
+
+# Columns of ArmArrays.link
+LEN, MASS, STATIC, INERTIA, HUB_MASS = 0, 1, 2, 3, 4
+N_LINK_COLUMNS = 5
+
+
+class ArmArrays(NamedTuple):
+    """The arm packed as plain arrays for the compiled kernels.
+
+    Attributes
+    ----------
+    mode_start : int64 array, shape (n_links + 1,)
+        Index in ``q`` of link ``i``'s first modal coordinate; link ``i`` owns
+        ``q[mode_start[i]:mode_start[i + 1]]``.
+    link : float array, shape (n_links, 5)
+        Per link: length (m), mass ``rho L`` (kg), static moment ``rho L**2 / 2``
+        (kg m), inertia about the joint ``rho L**3 / 3 + hub_inertia`` (kg m**2),
+        hub mass at the joint (kg).
+    mass_integral, moment_integral, tip_deflection, tip_slope : float arrays, shape (n_dof,)
+        ``int rho phi``, ``int rho x phi``, ``phi(L)``, ``phi'(L)`` at each modal
+        coordinate's index in ``q`` (zero at joint indices).
+    modal_mass : float array, shape (n_dof, n_dof)
+        ``int rho phi_j phi_k`` within each link's block, zero elsewhere.
+    stiffness, damping : float arrays, shape (n_dof,)
+        Diagonal of the stiffness (N m) and damping (N m s) matrices.
+    payload : float array, shape (2,)
+        Payload mass (kg) and rotary inertia (kg m**2) at the last link's tip.
+    """
+
+    mode_start: NDArray[np.int64]
+    link: F64
+    mass_integral: F64
+    moment_integral: F64
+    tip_deflection: F64
+    tip_slope: F64
+    modal_mass: F64
+    stiffness: F64
+    damping: F64
+    payload: F64
+
+
+class Workspace(NamedTuple):
+    """Scratch arrays for one thread of kernel calls (``n = n_dof``)."""
+
+    mass: F64  # (n, n)
+    bias: F64  # (n,)
+    jac: F64  # (2, n) base/tip velocity Jacobian, link frame
+    angle: F64  # (n,) gradient of the link's absolute angle
+    rhs: F64  # (n,)
+
+
+def make_workspace(n_dof: int) -> Workspace:
+    """Allocate the scratch arrays for an arm with ``n_dof`` coordinates."""
+    return Workspace(
+        np.zeros((n_dof, n_dof)),
+        np.zeros(n_dof),
+        np.zeros((2, n_dof)),
+        np.zeros(n_dof),
+        np.zeros(n_dof),
+    )
+
+
+@nb.njit(cache=True, fastmath=False, nogil=True)
+def mass_and_bias(
+    q: F64, dq: F64, model: ArmArrays, ws: Workspace
+) -> None:  # pragma: no cover - compiled
+    """Fill ``ws.mass`` with ``M(q)`` and ``ws.bias`` with ``C(q, dq) dq``.
+
+    Parameters
+    ----------
+    q, dq : ndarray, shape (n_dof,)
+        Coordinates (rad, modal units) and their rates.
+    model : ArmArrays
+    ws : Workspace
+        Overwritten: ``mass`` (n, n) and ``bias`` (n,); ``jac`` and ``angle`` are scratch.
+    """
+    n = q.shape[0]
+    M, h, U, A = ws.mass, ws.bias, ws.jac, ws.angle
+    ms = model.mode_start
+    lk = model.link
+    v, w = model.mass_integral, model.moment_integral
+    tdef, tslope, md = model.tip_deflection, model.tip_slope, model.modal_mass
+    n_links = lk.shape[0]
+    for r in range(n):
+        h[r] = 0.0
+        A[r] = 0.0
+        U[0, r] = 0.0
+        U[1, r] = 0.0
+        for c in range(n):
+            M[r, c] = 0.0
+    bx = 0.0
+    by = 0.0
+    for i in range(n_links):
+        if i > 0:
+            # Frame change from the tip of link i-1 to link i: gamma = theta_i + tip slope.
+            gamma = q[i]
+            for r in range(ms[i - 1], ms[i]):
+                gamma += tslope[r] * q[r]
+            cg, sg = np.cos(gamma), np.sin(gamma)
+            for r in range(n):
+                ux, uy = U[0, r], U[1, r]
+                U[0, r] = cg * ux + sg * uy
+                U[1, r] = -sg * ux + cg * uy
+            bx, by = cg * bx + sg * by, -sg * bx + cg * by
+            for r in range(ms[i - 1], ms[i]):
+                A[r] += tslope[r]
+            # hub mass at the joint, carried by the previous link's tip
+            mh = lk[i, HUB_MASS]
+            if mh != 0.0:
+                for r in range(n):
+                    h[r] += mh * (U[0, r] * bx + U[1, r] * by)
+                    for c in range(n):
+                        M[r, c] += mh * (U[0, r] * U[0, c] + U[1, r] * U[1, c])
+        A[i] += 1.0
+        L, m, cx, ia = lk[i, LEN], lk[i, MASS], lk[i, STATIC], lk[i, INERTIA]
+        a0, a1 = ms[i], ms[i + 1]
+        ad = 0.0
+        for r in range(n):
+            ad += A[r] * dq[r]
+        vd = 0.0  # v . delta
+        vdd = 0.0  # v . delta_dot
+        e = 0.0  # tip deflection
+        ed = 0.0  # tip deflection rate
+        dmd = 0.0  # delta' Md delta
+        dmdd = 0.0  # delta' Md delta_dot
+        for r in range(a0, a1):
+            vd += v[r] * q[r]
+            vdd += v[r] * dq[r]
+            e += tdef[r] * q[r]
+            ed += tdef[r] * dq[r]
+            for c in range(a0, a1):
+                dmd += q[r] * md[r, c] * q[c]
+                dmdd += q[r] * md[r, c] * dq[c]
+        ialpha = ia + dmd
+        # Rows of P = Mb Jb, accumulated straight into M = Jb' P (symmetric).
+        for c in range(n):
+            p_ux = m * U[0, c] - vd * A[c]
+            p_uy = m * U[1, c] + cx * A[c]
+            p_al = -vd * U[0, c] + cx * U[1, c] + ialpha * A[c]
+            if a0 <= c < a1:
+                p_uy += v[c]
+                p_al += w[c]
+            for r in range(n):
+                M[r, c] += U[0, r] * p_ux + U[1, r] * p_uy + A[r] * p_al
+            for r in range(a0, a1):
+                pd = v[r] * U[1, c] + w[r] * A[c]
+                if a0 <= c < a1:
+                    pd += md[r, c]
+                M[r, c] += pd
+        # Body-frame inertial force at qddot = 0.
+        ad2 = ad * ad
+        beta_ux = m * bx - ad2 * cx - 2.0 * ad * vdd
+        beta_uy = m * by - ad2 * vd
+        beta_al = -bx * vd + 2.0 * ad * dmdd + cx * by
+        for r in range(n):
+            h[r] += U[0, r] * beta_ux + U[1, r] * beta_uy + A[r] * beta_al
+        for r in range(a0, a1):
+            acc = v[r] * by
+            for c in range(a0, a1):
+                acc -= ad2 * md[r, c] * q[c]
+            h[r] += acc
+        # Tip of link i, still in link i's frame.
+        for c in range(n):
+            U[0, c] -= e * A[c]
+            U[1, c] += L * A[c]
+        for r in range(a0, a1):
+            U[1, r] += tdef[r]
+        bx += -ad2 * L - 2.0 * ad * ed
+        by += -ad2 * e
+    # Payload at the last tip: point mass, and rotary inertia turning with the tip slope.
+    mp, jp = model.payload[0], model.payload[1]
+    a0, a1 = ms[n_links - 1], ms[n_links]
+    if mp != 0.0:
+        for r in range(n):
+            h[r] += mp * (U[0, r] * bx + U[1, r] * by)
+            for c in range(n):
+                M[r, c] += mp * (U[0, r] * U[0, c] + U[1, r] * U[1, c])
+    if jp != 0.0:
+        for r in range(a0, a1):
+            A[r] += tslope[r]
+        for r in range(n):
+            for c in range(n):
+                M[r, c] += jp * A[r] * A[c]
+
+
+@nb.njit(cache=True, nogil=True)
+def _cholesky_solve(M: F64, b: F64, out: F64) -> None:  # pragma: no cover - compiled
+    """Solve ``M out = b`` for symmetric positive definite ``M`` (overwritten by its factor)."""
+    n = M.shape[0]
+    for j in range(n):
+        s = M[j, j]
+        for k in range(j):
+            s -= M[j, k] * M[j, k]
+        d = np.sqrt(s)
+        M[j, j] = d
+        for i in range(j + 1, n):
+            t = M[i, j]
+            for k in range(j):
+                t -= M[i, k] * M[j, k]
+            M[i, j] = t / d
+    for i in range(n):
+        t = b[i]
+        for k in range(i):
+            t -= M[i, k] * out[k]
+        out[i] = t / M[i, i]
+    for i in range(n - 1, -1, -1):
+        t = out[i]
+        for k in range(i + 1, n):
+            t -= M[k, i] * out[k]
+        out[i] = t / M[i, i]
+
+
+@nb.njit(cache=True, nogil=True)
+def forward_dynamics(
+    q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
+) -> None:  # pragma: no cover - compiled
+    """``ddq = M(q)^-1 (B tau - C(q, dq) dq - K q - D dq)``, written into ``ddq``.
+
+    Parameters
+    ----------
+    q, dq : ndarray, shape (n_dof,)
+    tau : ndarray, shape (n_links,)
+        Joint torques in N m.
+    model : ArmArrays
+    ws : Workspace
+        Scratch (overwritten).
+    ddq : ndarray, shape (n_dof,)
+        Output accelerations.
+    """
+    mass_and_bias(q, dq, model, ws)
+    n = q.shape[0]
+    rhs = ws.rhs
+    for r in range(n):
+        rhs[r] = -ws.bias[r] - model.stiffness[r] * q[r] - model.damping[r] * dq[r]
+    for r in range(tau.shape[0]):
+        rhs[r] += tau[r]
+    _cholesky_solve(ws.mass, rhs, ddq)
