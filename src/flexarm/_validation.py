@@ -27,8 +27,20 @@ __all__ = [
 ]
 
 
+class _Described(str):
+    """A description of the value got, printed without quotes."""
+
+    def __repr__(self) -> str:
+        return str(self)
+
+
 def _fail(name: str, owner: str, expected: str, got: Any) -> str:
     return f"The '{name}' parameter of {owner} must be {expected}. Got {got!r} instead."
+
+
+def _shape_text(shape: tuple[int, ...]) -> str:
+    parts = ["any" if s == -1 else str(s) for s in shape]
+    return "(" + ", ".join(parts) + (",)" if len(parts) == 1 else ")")
 
 
 def check_real(
@@ -104,9 +116,9 @@ def check_array(
     try:
         arr = np.asarray(value)
     except Exception as exc:  # pragma: no cover - numpy raises many types here
-        raise TypeError(_fail(name, owner, "array-like", type(value).__name__)) from exc
+        raise TypeError(_fail(name, owner, "array-like", _Described(type(value).__name__))) from exc
     if arr.dtype.kind not in "biufc":
-        raise TypeError(_fail(name, owner, "a numeric array", f"dtype {arr.dtype}"))
+        raise TypeError(_fail(name, owner, "a numeric array", _Described(f"dtype {arr.dtype}")))
     if arr.dtype.kind != "c":
         arr = arr.astype(dtype, copy=False)
     if shape is not None:
@@ -114,8 +126,13 @@ def check_array(
             s == -1 or s == a for s, a in zip(shape, arr.shape, strict=True)
         )
         if not ok:
-            want = "(" + ", ".join("any" if s == -1 else str(s) for s in shape) + ")"
-            raise ValueError(_fail(name, owner, f"of shape {want}", f"shape {arr.shape}"))
+            raise ValueError(
+                _fail(
+                    name, owner, f"of shape {_shape_text(shape)}", _Described(f"shape {arr.shape}")
+                )
+            )
     if finite and not np.all(np.isfinite(arr)):
-        raise ValueError(_fail(name, owner, "finite (no NaN or inf)", "non-finite entries"))
+        raise ValueError(
+            _fail(name, owner, "finite (no NaN or inf)", _Described("non-finite entries"))
+        )
     return arr

@@ -61,6 +61,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from . import kernels
@@ -116,7 +117,7 @@ class FlexibleArm:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        links = self.links
+        links: Any = self.links
         if isinstance(links, Link):
             links = (links,)
         if not isinstance(links, Sequence) or isinstance(links, str):
@@ -126,7 +127,9 @@ class FlexibleArm:
             )
         links = tuple(links)
         if len(links) == 0:
-            raise ValueError(f"The 'links' parameter of {_OWNER} must hold >= 1 Link. Got 0 instead.")
+            raise ValueError(
+                f"The 'links' parameter of {_OWNER} must hold >= 1 Link. Got 0 instead."
+            )
         for k, lk in enumerate(links):
             if not isinstance(lk, Link):
                 raise TypeError(
@@ -306,9 +309,7 @@ class FlexibleArm:
         return arr
 
     # --------------------------------------------------- body Jacobians (NumPy)
-    def _body_terms(
-        self, q: NDArray[Any], dq: NDArray[Any] | None
-    ) -> list[tuple[Any, ...]]:
+    def _body_terms(self, q: NDArray[Any], dq: NDArray[Any] | None) -> list[tuple[Any, ...]]:
         """Per body: (Jb, Mb, beta) with ``T = 1/2 (Jb dq)' Mb (Jb dq)`` and the
         inertial force ``Jb' beta`` at ``qddot = 0`` (``beta`` is None when
         ``dq`` is None). Works for real and complex ``q`` (complex step)."""
@@ -419,7 +420,9 @@ class FlexibleArm:
         t3 = np.einsum("kij,i->kj", dM, dq)
         return 0.5 * (t1 + t2 - t3)  # type: ignore[no-any-return]
 
-    def generalized_forces(self, q: NDArray[Any], dq: NDArray[Any], tau: NDArray[Any]) -> NDArray[Any]:
+    def generalized_forces(
+        self, q: NDArray[Any], dq: NDArray[Any], tau: NDArray[Any]
+    ) -> NDArray[Any]:
         """``B tau - K q - D dq``, shape ``(n_dof,)``."""
         out = -self.arrays.stiffness * q - self.arrays.damping * dq
         out[: self.n_links] += tau
@@ -461,7 +464,7 @@ class FlexibleArm:
             )
             return ddq
         rhs = self.generalized_forces(q, dq, tau) - self.velocity_terms(q, dq)
-        return np.linalg.solve(self.mass_matrix(q), rhs)  # type: ignore[no-any-return]
+        return np.linalg.solve(self.mass_matrix(q), rhs)
 
     def energy(self, q: ArrayLike, dq: ArrayLike) -> tuple[float, float]:
         """Kinetic and potential (elastic) energy in J."""
@@ -469,6 +472,45 @@ class FlexibleArm:
         kinetic = 0.5 * dq @ self.mass_matrix(q) @ dq
         potential = 0.5 * q @ (self.arrays.stiffness * q)
         return float(kinetic), float(potential)
+
+    def natural_frequencies(
+        self, q: ArrayLike | None = None, joints: str = "locked"
+    ) -> NDArray[np.float64]:
+        """Natural frequencies of the arm linearised about a configuration at rest.
+
+        Parameters
+        ----------
+        q : array_like, shape (n_dof,), optional
+            Configuration (default: straight arm, all zeros). Modal coordinates
+            should be zero for a meaningful linearisation.
+        joints : {"locked", "free"}
+            ``"locked"`` clamps every joint angle (infinitely stiff servos);
+            ``"free"`` leaves them unactuated (``tau = 0``), so the rigid-body
+            motions have zero frequency and are left out.
+
+        Returns
+        -------
+        ndarray
+            Increasing frequencies in rad/s, one per modal coordinate.
+        """
+        check_option(joints, "joints", _OWNER, ("locked", "free"))
+        q = np.zeros(self.n_dof) if q is None else self._check_q(q)
+        M, K = self.mass_matrix(q), self.stiffness_matrix
+        N = self.n_links
+        if joints == "locked":
+            M, K = M[N:, N:], K[N:, N:]
+            if M.size == 0:
+                return np.zeros(0)
+            lam = scipy.linalg.eigh(K, M, eigvals_only=True)
+        else:
+            # Static condensation of the inertia onto the elastic coordinates:
+            # with tau = 0 the joint equations give theta_dd in terms of delta_dd.
+            if self.n_dof == N:
+                return np.zeros(0)
+            Mtt, Mtd, Mdd = M[:N, :N], M[:N, N:], M[N:, N:]
+            Meff = Mdd - Mtd.T @ np.linalg.solve(Mtt, Mtd)
+            lam = scipy.linalg.eigh(K[N:, N:], 0.5 * (Meff + Meff.T), eigvals_only=True)
+        return np.sqrt(np.clip(lam, 0.0, None))  # type: ignore[no-any-return]
 
     # -------------------------------------------------------------- kinematics
     def point_position(self, q: ArrayLike, link: int, distance: float) -> NDArray[np.float64]:
@@ -546,7 +588,7 @@ class FlexibleArm:
         theta = self._check_theta(theta)
         lengths = np.array([lk.length for lk in self.links])
         phi = np.cumsum(theta, axis=-1)
-        return np.stack([np.cos(phi) @ lengths, np.sin(phi) @ lengths], axis=-1)  # type: ignore[no-any-return]
+        return np.stack([np.cos(phi) @ lengths, np.sin(phi) @ lengths], axis=-1)
 
     def jacobian(self, theta: ArrayLike) -> NDArray[np.float64]:
         """Rigid-link Jacobian ``d(x, y)/d theta``, shape ``(2, n_links)`` or
@@ -557,7 +599,7 @@ class FlexibleArm:
         # column k: sum over i >= k of L_i (-sin phi_i, cos phi_i)
         cx = np.flip(np.cumsum(np.flip(-lengths * np.sin(phi), -1), -1), -1)
         cy = np.flip(np.cumsum(np.flip(lengths * np.cos(phi), -1), -1), -1)
-        return np.stack([cx, cy], axis=-2)  # type: ignore[no-any-return]
+        return np.stack([cx, cy], axis=-2)
 
     def inverse_kinematics(
         self, position: ArrayLike, elbow: str = "positive"
@@ -610,4 +652,4 @@ class FlexibleArm:
         t2 = np.arctan2(s2, c2)
         t1 = np.arctan2(y, x) - np.arctan2(l2 * s2, l1 + l2 * c2)
         t1 = (t1 + math.pi) % (2 * math.pi) - math.pi
-        return np.stack([t1, t2], axis=-1)  # type: ignore[no-any-return]
+        return np.stack([t1, t2], axis=-1)

@@ -103,7 +103,8 @@ def frequency_function(
         - jr * lam**3 * (s + tanh * c)
         + mu * jr * lam**4 * (sech - c)
     )
-    return f / (1.0 + mu * lam + jr * lam**3 + mu * jr * lam**4)
+    out: NDArray[np.float64] = f / (1.0 + mu * lam + jr * lam**3 + mu * jr * lam**4)
+    return out
 
 
 def clamped_mass_roots(
@@ -144,8 +145,8 @@ def clamped_mass_roots(
     while len(roots) < n:
         # Roots are about pi apart for large lam: extend in blocks that hold the rest.
         span = (n - len(roots) + 2) * math.pi
-        grid = upper + _LINEAR_STEP * np.arange(1, int(span / _LINEAR_STEP) + 2)
-        grid = np.concatenate([[upper], grid])
+        steps = np.arange(int(span / _LINEAR_STEP) + 2, dtype=np.float64)
+        grid: NDArray[np.float64] = upper + _LINEAR_STEP * steps
         _collect_roots(grid, mu, jr, roots, n)
         upper = float(grid[-1])
     return np.asarray(roots[:n])
@@ -182,9 +183,7 @@ def cantilever_roots(n: int) -> NDArray[np.float64]:
     return clamped_mass_roots(n, 0.0, 0.0)
 
 
-def _shape_coefficients(
-    lam: NDArray[np.float64], mu: float, jr: float
-) -> NDArray[np.float64]:
+def _shape_coefficients(lam: NDArray[np.float64], mu: float, jr: float) -> NDArray[np.float64]:
     """Coefficients (a, b, c, d), shape (4, n), of the unnormalised shapes.
 
     ``phi(z) = a e**(z - lam) + b e**(-z) + c cos z + d sin z`` with the clamp
@@ -195,7 +194,12 @@ def _shape_coefficients(
     eps = np.exp(-lam)
     co, si = np.cos(lam), np.sin(lam)
     # phi^(k)(lam) = a * pa[k] + b * pb[k]
-    pa = [1 - eps * co - eps * si, 1 + eps * si - eps * co, 1 + eps * co + eps * si, 1 - eps * si + eps * co]
+    pa = [
+        1 - eps * co - eps * si,
+        1 + eps * si - eps * co,
+        1 + eps * co + eps * si,
+        1 - eps * si + eps * co,
+    ]
     pb = [eps - co + si, -eps + si + co, eps + co - si, -eps - si - co]
     # Tip conditions: phi'' - j lam^3 phi' = 0 and phi''' + mu lam phi = 0, each scaled.
     s1 = 1.0 + jr * lam**3
@@ -285,7 +289,9 @@ class BeamModes:
         set_(self, "n_modes", check_int(self.n_modes, "n_modes", owner, minimum=0))
         set_(self, "tip_mass", check_real(self.tip_mass, "tip_mass", owner, nonnegative=True))
         set_(
-            self, "tip_inertia", check_real(self.tip_inertia, "tip_inertia", owner, nonnegative=True)
+            self,
+            "tip_inertia",
+            check_real(self.tip_inertia, "tip_inertia", owner, nonnegative=True),
         )
         check_option(self.normalization, "normalization", owner, NORMALIZATIONS)
         set_(self, "amplitude", check_real(self.amplitude, "amplitude", owner, positive=True))
@@ -404,7 +410,7 @@ class BeamModes:
         """Gauss–Legendre nodes and weights on ``[0, L]`` exact for these modes."""
         if "quad" not in self._cache:
             lam_max = float(self.roots[-1]) if self.n_modes else 0.0
-            npts = 64 + 2 * int(math.ceil(lam_max))
+            npts = 64 + 2 * math.ceil(lam_max)
             t, w = np.polynomial.legendre.leggauss(npts)
             L = self.length
             self._cache["quad"] = (_frozen(0.5 * L * (t + 1.0)), _frozen(0.5 * L * w))
@@ -426,9 +432,7 @@ class BeamModes:
     def moment_integral(self) -> NDArray[np.float64]:
         """``int_0^L rho x phi_j dx``, shape ``(n_modes,)``, kg m**2 per unit coordinate."""
         rho = self.linear_density
-        return self._integral(
-            "w", lambda x, w: rho * self._derivative_unchecked(x, 0) @ (w * x)
-        )
+        return self._integral("w", lambda x, w: rho * self._derivative_unchecked(x, 0) @ (w * x))
 
     @property
     def modal_mass(self) -> NDArray[np.float64]:
@@ -469,7 +473,7 @@ class BeamModes:
         x, w = self._quadrature()
         c = self._derivative_unchecked(x, 2)
         k = self.flexural_rigidity * (c * w) @ c.T
-        return 0.5 * (k + k.T)  # type: ignore[no-any-return]
+        return 0.5 * (k + k.T)
 
     # --------------------------------------------------------------- internals
     def _normalization_scale(self, coef: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -479,12 +483,12 @@ class BeamModes:
             c1 = -coef[2]
             return self.amplitude / c1  # type: ignore[no-any-return]
         if self.normalization == "tip":
-            return 1.0 / self.tip_deflection  # type: ignore[no-any-return]
+            return 1.0 / self.tip_deflection
         # "mass": unit generalised modal mass; built from the unit-norm coefficients.
         self._cache.pop("M", None)
         gm = np.diag(self.generalized_mass)
         self._cache.pop("M", None)
-        return 1.0 / np.sqrt(gm)  # type: ignore[no-any-return]
+        return 1.0 / np.sqrt(gm)
 
 
 def _frozen(a: NDArray[Any]) -> NDArray[Any]:

@@ -1,0 +1,121 @@
+"""The ``flexarm`` command line: output, JSON, and one-line errors with status 2."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+from flexarm.cli import main
+
+
+def run(capsys, *argv):
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_help_lists_every_command(capsys):
+    status, out, _ = run(capsys)
+    assert status == 0
+    assert "modes" in out
+    with pytest.raises(SystemExit) as exc:
+        main(["--help"])
+    assert exc.value.code == 0
+    assert "modes" in capsys.readouterr().out
+
+
+def test_modes_help(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["modes", "--help"])
+    assert exc.value.code == 0
+    assert "--length" in capsys.readouterr().out
+
+
+def test_modes_prints_the_paper_arm(capsys):
+    status, out, err = run(capsys, "modes")
+    assert status == 0 and err == ""
+    assert "1.8751040687" in out
+    assert "12.28119" in out  # rad/s
+    assert "1.95461" in out  # Hz
+    assert out.count("Link") == 2
+
+
+def test_modes_json_for_the_paper_arm(capsys):
+    status, out, _ = run(capsys, "modes", "--json", "--n-modes", "3")
+    assert status == 0
+    data = json.loads(out)
+    assert len(data["links"]) == 2
+    link = data["links"][0]
+    assert link["roots"][:3] == pytest.approx([1.8751040687, 4.6940911330, 7.8547574382], abs=1e-10)
+    assert link["frequencies_rad_s"][0] == pytest.approx(12.281, abs=5e-4)
+    assert link["frequencies_hz"][0] == pytest.approx(12.281 / (2 * 3.141592653589793), rel=1e-4)
+    assert data["arm_frequencies_locked_rad_s"][0] > 0
+
+
+def test_modes_for_a_link_on_the_command_line(capsys):
+    status, out, _ = run(
+        capsys,
+        "modes",
+        "--length",
+        "1",
+        "--flexural-rigidity",
+        "1",
+        "--linear-density",
+        "1",
+        "--tip-mass",
+        "1",
+        "--n-modes",
+        "2",
+        "--json",
+    )
+    assert status == 0
+    roots = json.loads(out)["links"][0]["roots"]
+    assert roots[0] == pytest.approx(1.24792, abs=1e-5)  # tip-mass ratio 1 (Blevins)
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (
+            ["modes", "--length", "-1", "--flexural-rigidity", "1", "--linear-density", "1"],
+            "length",
+        ),
+        (
+            ["modes", "--length", "nan", "--flexural-rigidity", "1", "--linear-density", "1"],
+            "length",
+        ),
+        (["modes", "--length", "1"], "--flexural-rigidity"),
+        (["modes", "--n-modes", "-2"], "n_modes"),
+        (["modes", "--n-modes", "x"], "--n-modes"),
+        (["modes", "--boundary", "pinned"], "--boundary"),
+        (["modes", "--normalization", "unit"], "--normalization"),
+        (["modes", "--tip-mass", "1"], "--tip-mass"),
+        (["modes", "--bogus"], "--bogus"),
+        (["nonsense"], "nonsense"),
+    ],
+)
+def test_bad_input_is_one_line_with_status_2(capsys, argv, needle):
+    status, out, err = run(capsys, *argv)
+    assert status == 2
+    assert out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert needle in lines[0]
+    assert "Traceback" not in err
+
+
+def test_console_script_runs_without_traceback():
+    exe = shutil.which("flexarm")
+    cmd = [exe] if exe else [sys.executable, "-m", "flexarm"]
+    ok = subprocess.run([*cmd, "modes", "--json"], capture_output=True, text=True, check=False)
+    assert ok.returncode == 0, ok.stderr
+    assert json.loads(ok.stdout)["links"][0]["roots"][0] == pytest.approx(1.8751040687)
+    bad = subprocess.run(
+        [*cmd, "modes", "--n-modes", "-1"], capture_output=True, text=True, check=False
+    )
+    assert bad.returncode == 2
+    assert len(bad.stderr.strip().splitlines()) == 1 and "Traceback" not in bad.stderr
