@@ -459,11 +459,6 @@ def test_arm_rejects_bad_parameters(kwargs, error, match):
         fa.FlexibleArm(**params)
 
 
-def test_arm_rejects_joints_until_implemented():
-    with pytest.raises(NotImplementedError, match="'joints'"):
-        fa.FlexibleArm([fa.Link(**GOOD_LINK)], joints=[object()])
-
-
 @pytest.mark.parametrize(
     ("method", "args", "match"),
     [

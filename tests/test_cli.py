@@ -56,6 +56,22 @@ def test_modes_json_for_the_paper_arm(capsys):
     assert data["arm_frequencies_locked_rad_s"][0] > 0
 
 
+@pytest.mark.parametrize("joints", ["linear", "nonlinear"])
+def test_modes_reports_linearised_frequencies_with_joints(capsys, joints):
+    status, out, _ = run(capsys, "modes", "--joints", joints, "--json")
+    assert status == 0
+    data = json.loads(out)
+    assert data["joints"] == joints
+    rigid = json.loads(run(capsys, "modes", "--json")[1])
+    # two more elastic degrees of freedom (the joint springs), and a softer arm
+    assert (
+        len(data["arm_frequencies_locked_rad_s"]) == len(rigid["arm_frequencies_locked_rad_s"]) + 2
+    )
+    assert data["arm_frequencies_locked_rad_s"][0] < rigid["arm_frequencies_locked_rad_s"][0]
+    status, out, _ = run(capsys, "modes", "--joints", joints)
+    assert "joints" in out
+
+
 def test_modes_for_a_link_on_the_command_line(capsys):
     status, out, _ = run(
         capsys,
@@ -94,6 +110,21 @@ def test_modes_for_a_link_on_the_command_line(capsys):
         (["modes", "--boundary", "pinned"], "--boundary"),
         (["modes", "--normalization", "unit"], "--normalization"),
         (["modes", "--tip-mass", "1"], "--tip-mass"),
+        (["modes", "--joints", "elastic"], "--joints"),
+        (
+            [
+                "modes",
+                "--length",
+                "1",
+                "--flexural-rigidity",
+                "1",
+                "--linear-density",
+                "1",
+                "--joints",
+                "linear",
+            ],
+            "--joints",
+        ),
         (["modes", "--bogus"], "--bogus"),
         (["nonsense"], "nonsense"),
     ],

@@ -14,6 +14,7 @@ LAYERS = {
     "_validation": 0,
     "modes": 1,
     "link": 1,
+    "joints": 1,
     "kernels": 2,
     "arm": 3,
     "cli": 9,

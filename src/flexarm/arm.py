@@ -26,8 +26,22 @@ built from this one kinematic map with no further truncation,
 
 conserve ``T + V`` exactly when ``tau = 0`` and ``D = 0``.
 
-Coordinates ``q = (theta_1..theta_N, delta_1, ..., delta_N)``: joint angles
-(rad), then every link's modal coordinates in link order.
+Coordinates ``q = (theta_1..theta_N, delta_1, ..., delta_N[, q_m1..q_mN])``:
+joint (link-side) angles in rad, every link's modal coordinates in link order,
+and with flexible ``joints`` the motor angles (reflected to the link side).
+
+Flexible joints
+---------------
+Joint ``i`` couples its motor angle to the link angle by a spring of
+deflection ``Delta_i = q_mi - theta_i`` (:mod:`flexarm.joints`): the spring
+torque acts on ``theta_i`` and its reaction on ``q_mi``; the input torque and
+motor damping act on ``q_mi``. Friction acts on the link side, on
+``dtheta_i`` (paper eq. 7), or with ``joint_friction="motor"`` on ``dq_mi``.
+The rotor of joint ``i`` is carried by link ``i-1`` (the base for ``i = 0``):
+its kinetic energy is ``1/2 J_m (carrier angle rate + dq_mi)**2``, which gives
+the inertial coupling ``S`` of the paper (with ``rotor_coupling=False``
+only ``1/2 J_m dq_mi**2``, Spong's simplification). The rotor's mass belongs
+in the hub mass. Joint springs add their potential to ``V``.
 
 Hubs and payload: ``Link.hub_inertia`` turns with its link; ``Link.hub_mass``
 is a point mass at the joint, carried by the previous link's tip. The payload
@@ -66,12 +80,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import kernels
 from ._validation import check_array, check_int, check_option, check_real
+from .joints import LinearJoint, NonlinearJoint
 from .link import Link
 from .modes import NORMALIZATIONS, BeamModes
 
-__all__ = ["BOUNDARIES", "FlexibleArm"]
+__all__ = ["BOUNDARIES", "FRICTION_SIDES", "FlexibleArm"]
 
 BOUNDARIES = ("clamped-free", "clamped-mass")
+FRICTION_SIDES = ("link", "motor")
 
 _OWNER = "FlexibleArm"
 
@@ -90,12 +106,18 @@ class FlexibleArm:
         Rotary inertia of the payload about the tip, kg m**2 (>= 0).
     boundary : {"clamped-free", "clamped-mass"}
         Boundary conditions of the assumed modes (module docstring).
-    joints : None
-        Rigid joints. Flexible joints are not available yet.
+    joints : sequence of LinearJoint or NonlinearJoint, optional
+        One flexible joint per link (None: rigid joints). Adds the motor angles
+        to ``q``.
     mode_normalization : {"mass", "amplitude", "tip"}
         Scaling of the mode shapes (:mod:`flexarm.modes`); default ``"mass"``.
     mode_amplitude : float
         The paper's ``A`` when ``mode_normalization="amplitude"``.
+    joint_friction : {"link", "motor"}
+        Where joint friction acts (default ``"link"``, paper eq. 7).
+    rotor_coupling : bool
+        Whether a rotor's kinetic energy includes its carrier link's rotation
+        (the paper's ``S``; default True).
 
     Examples
     --------
@@ -110,9 +132,11 @@ class FlexibleArm:
     payload_mass: float = 0.0
     payload_inertia: float = 0.0
     boundary: str = "clamped-free"
-    joints: None = None
+    joints: Sequence[LinearJoint | NonlinearJoint] | None = None
     mode_normalization: str = "mass"
     mode_amplitude: float = 0.1
+    joint_friction: str = "link"
+    rotor_coupling: bool = True
     _derived: dict[str, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -141,9 +165,12 @@ class FlexibleArm:
             set_(self, name, check_real(getattr(self, name), name, _OWNER, nonnegative=True))
         check_option(self.boundary, "boundary", _OWNER, BOUNDARIES)
         if self.joints is not None:
-            raise NotImplementedError(
-                "The 'joints' parameter of FlexibleArm must be None: flexible joints "
-                "are not implemented yet."
+            set_(self, "joints", self._check_joints(self.joints, len(links)))
+        check_option(self.joint_friction, "joint_friction", _OWNER, FRICTION_SIDES)
+        if not isinstance(self.rotor_coupling, bool):
+            raise TypeError(
+                f"The 'rotor_coupling' parameter of {_OWNER} must be a bool. "
+                f"Got {self.rotor_coupling!r} instead."
             )
         check_option(self.mode_normalization, "mode_normalization", _OWNER, NORMALIZATIONS)
         set_(
@@ -180,6 +207,30 @@ class FlexibleArm:
         link = Link(4.5, 1676.0, 0.335, n_modes=n_modes)
         return cls(links=(link, link), **overrides)
 
+    @staticmethod
+    def _check_joints(joints: Any, n_links: int) -> tuple[LinearJoint | NonlinearJoint, ...]:
+        if isinstance(joints, LinearJoint | NonlinearJoint):
+            joints = (joints,)
+        if not isinstance(joints, Sequence) or isinstance(joints, str):
+            raise TypeError(
+                f"The 'joints' parameter of {_OWNER} must be a sequence of LinearJoint or "
+                f"NonlinearJoint. Got {type(joints).__name__} instead."
+            )
+        joints = tuple(joints)
+        if len(joints) != n_links:
+            raise ValueError(
+                f"The 'joints' parameter of {_OWNER} must hold one joint per link "
+                f"({n_links}). Got {len(joints)} instead."
+            )
+        for k, jt in enumerate(joints):
+            if not isinstance(jt, LinearJoint | NonlinearJoint):
+                raise TypeError(
+                    f"The 'joints' parameter of {_OWNER} must hold LinearJoint or "
+                    f"NonlinearJoint objects. Got {type(jt).__name__} at position {k} instead."
+                )
+        checked: tuple[LinearJoint | NonlinearJoint, ...] = joints
+        return checked
+
     def _tip_loads(self) -> list[tuple[float, float]]:
         """Tip mass and inertia (about the tip) loading each link's modes."""
         links = self.links
@@ -190,9 +241,11 @@ class FlexibleArm:
             mass = self.payload_mass
             inertia = self.payload_inertia
             d = 0.0  # distance from tip i to the base of the next outboard link
-            for lk in links[i + 1 :]:
+            for k, lk in enumerate(links[i + 1 :], start=i + 1):
                 mass += lk.hub_mass + lk.mass
                 inertia += lk.hub_mass * d**2 + lk.hub_inertia
+                if self.joints is not None:
+                    inertia += self.joints[k].motor_inertia
                 inertia += lk.linear_density * ((d + lk.length) ** 3 - d**3) / 3.0
                 d += lk.length
             inertia += self.payload_mass * d**2
@@ -218,8 +271,29 @@ class FlexibleArm:
             md[s, s] = bm.modal_mass
             k[s] = np.diag(bm.modal_stiffness)
             d[s] = 2.0 * lk.modal_damping * bm.frequencies * np.diag(bm.generalized_mass)
+        joint = np.zeros((len(self.joints or ()), kernels.N_JOINT_COLUMNS))
+        for i, jt in enumerate(self.joints or ()):
+            row = joint[i]
+            row[kernels.J_A1 : kernels.J_ASW + 1] = jt.spring_params
+            row[kernels.J_INERTIA] = jt.motor_inertia
+            row[kernels.J_DAMPING] = jt.motor_damping
+            row[kernels.J_COUPLED] = float(self.rotor_coupling)
+            if jt.friction is not None:
+                row[kernels.J_HAS_FRICTION] = 1.0
+                row[kernels.J_FRICTION_ON_MOTOR] = float(self.joint_friction == "motor")
+                row[kernels.J_G1 :] = jt.friction.params
         arrays = kernels.ArmArrays(
-            start, link, v, w, h, g, md, k, d, np.array([self.payload_mass, self.payload_inertia])
+            start,
+            link,
+            v,
+            w,
+            h,
+            g,
+            md,
+            k,
+            d,
+            np.array([self.payload_mass, self.payload_inertia]),
+            joint,
         )
         for a in arrays:
             a.flags.writeable = False
@@ -236,9 +310,15 @@ class FlexibleArm:
         return tuple(lk.n_modes for lk in self.links)
 
     @property
+    def has_flexible_joints(self) -> bool:
+        return self.joints is not None
+
+    @property
     def n_dof(self) -> int:
-        """Number of generalised coordinates: joint angles plus all modal coordinates."""
-        return self.n_links + sum(self.n_modes)
+        """Number of generalised coordinates: joint angles, modal coordinates and,
+        with flexible joints, motor angles."""
+        n = self.n_links + sum(self.n_modes)
+        return n + self.n_links if self.joints is not None else n
 
     @property
     def modes(self) -> tuple[BeamModes, ...]:
@@ -262,28 +342,59 @@ class FlexibleArm:
         return slice(int(s[link]), int(s[link + 1]))
 
     @property
+    def motor_slice(self) -> slice:
+        """Indices in ``q`` of the motor angles (empty without flexible joints)."""
+        start = int(self.arrays.mode_start[-1])
+        return slice(start, self.n_dof)
+
+    @property
+    def actuated_slice(self) -> slice:
+        """Indices in ``q`` that the joint torques drive: the joint angles for rigid
+        joints, the motor angles for flexible joints."""
+        return self.motor_slice if self.joints is not None else slice(0, self.n_links)
+
+    @property
     def coordinate_names(self) -> list[str]:
-        """Names of the coordinates in ``q``: ``theta1``, ..., ``delta2_1`` (link, mode)."""
+        """Names of the coordinates in ``q``: ``theta1``, ..., ``delta2_1`` (link,
+        mode), ``qm1``, ... (motor angles)."""
         names = [f"theta{i + 1}" for i in range(self.n_links)]
         for i, nm in enumerate(self.n_modes):
             names += [f"delta{i + 1}_{j + 1}" for j in range(nm)]
+        if self.joints is not None:
+            names += [f"qm{i + 1}" for i in range(self.n_links)]
         return names
 
     @property
     def stiffness_matrix(self) -> NDArray[np.float64]:
-        """``K = blockdiag(0, modal stiffness)``, shape ``(n_dof, n_dof)``."""
-        return np.diag(self.arrays.stiffness)
+        """Stiffness ``K``, shape ``(n_dof, n_dof)``: the modal stiffness and, with
+        flexible joints, each joint spring linearised at zero deflection
+        (``a1 - ksw``) coupling ``theta_i`` and ``q_mi``."""
+        K = np.diag(self.arrays.stiffness)
+        m = self.motor_slice.start
+        for i, jt in enumerate(self.joints or ()):
+            k = float(jt.tangent_stiffness(0.0))
+            K[i, i] += k
+            K[m + i, m + i] += k
+            K[i, m + i] -= k
+            K[m + i, i] -= k
+        return K
 
     @property
     def damping_matrix(self) -> NDArray[np.float64]:
-        """Modal damping ``D``, shape ``(n_dof, n_dof)``, N m s."""
-        return np.diag(self.arrays.damping)
+        """Linear damping ``D`` (modal damping, motor damping), shape ``(n_dof, n_dof)``,
+        in N m s per coordinate rate. Joint friction is not included."""
+        D = np.diag(self.arrays.damping)
+        m = self.motor_slice.start
+        for i, jt in enumerate(self.joints or ()):
+            D[m + i, m + i] += jt.motor_damping
+        return D
 
     @property
     def input_matrix(self) -> NDArray[np.float64]:
-        """``B = [I; 0]``, shape ``(n_dof, n_links)``: joint torques act on the joint angles."""
+        """``B``, shape ``(n_dof, n_links)``: joint torques act on the joint angles
+        (rigid joints) or on the motor angles (flexible joints)."""
         b = np.zeros((self.n_dof, self.n_links))
-        b[: self.n_links] = np.eye(self.n_links)
+        b[self.actuated_slice] = np.eye(self.n_links)
         return b
 
     # ------------------------------------------------------------- validation
@@ -330,6 +441,13 @@ class FlexibleArm:
                 U, b = Rt @ U, Rt @ b
                 A = A.copy()
                 A[prev] += a.tip_slope[prev]
+            if self.joints is not None:
+                # rotor i spins at (carrier angle rate + dq_mi); A is the carrier's gradient
+                row = A.copy() if self.rotor_coupling else np.zeros(n)
+                row[self.motor_slice.start + i] += 1.0
+                jm = self.joints[i].motor_inertia
+                bodies.append((row[None, :], np.array([[jm]]), None if dq is None else np.zeros(1)))
+            if i > 0:
                 mh = self.links[i].hub_mass
                 bodies.append((U.copy(), mh * np.eye(2), None if dq is None else mh * b))
             A = A.copy()
@@ -423,22 +541,36 @@ class FlexibleArm:
     def generalized_forces(
         self, q: NDArray[Any], dq: NDArray[Any], tau: NDArray[Any]
     ) -> NDArray[Any]:
-        """``B tau - K q - D dq``, shape ``(n_dof,)``."""
+        """Generalised forces other than inertia, shape ``(n_dof,)``: ``B tau``, the
+        modal stiffness and damping, and the joints' spring, friction and motor
+        damping torques."""
         out = -self.arrays.stiffness * q - self.arrays.damping * dq
-        out[: self.n_links] += tau
+        if self.joints is None:
+            out[: self.n_links] += tau
+            return out  # type: ignore[no-any-return]
+        m0 = self.motor_slice.start
+        for i, jt in enumerate(self.joints):
+            m = m0 + i
+            ts = jt.torque(q[m] - q[i])
+            out[i] += ts
+            out[m] += tau[i] - ts - jt.motor_damping * dq[m]
+            if jt.friction is not None:
+                k = m if self.joint_friction == "motor" else i
+                out[k] -= jt.friction(dq[k])
         return out  # type: ignore[no-any-return]
 
     def forward_dynamics(
         self, q: ArrayLike, dq: ArrayLike, tau: ArrayLike, *, backend: str = "numpy"
     ) -> NDArray[np.float64]:
-        """Accelerations ``qddot = M^-1 (B tau - C dq - K q - D dq)``.
+        """Accelerations ``qddot = M^-1 (Q(q, dq, tau) - C dq)`` with ``Q`` from
+        :meth:`generalized_forces`.
 
         Parameters
         ----------
         q, dq : array_like, shape (n_dof,)
             Coordinates and rates (rad, rad/s; modal units).
         tau : array_like, shape (n_links,)
-            Joint torques, N m.
+            Joint (motor) torques, N m.
         backend : {"numpy", "compiled"}
             ``"numpy"`` is the readable reference; ``"compiled"`` calls the Numba
             kernel :func:`flexarm.kernels.forward_dynamics` (compiled on first use,
@@ -467,10 +599,13 @@ class FlexibleArm:
         return np.linalg.solve(self.mass_matrix(q), rhs)
 
     def energy(self, q: ArrayLike, dq: ArrayLike) -> tuple[float, float]:
-        """Kinetic and potential (elastic) energy in J."""
+        """Kinetic and potential (elastic: links and joint springs) energy in J."""
         q, dq = self._check_q(q), self._check_q(dq, "dq")
         kinetic = 0.5 * dq @ self.mass_matrix(q) @ dq
         potential = 0.5 * q @ (self.arrays.stiffness * q)
+        m0 = self.motor_slice.start
+        for i, jt in enumerate(self.joints or ()):
+            potential += float(jt.potential(q[m0 + i] - q[i]))
         return float(kinetic), float(potential)
 
     def natural_frequencies(
@@ -484,32 +619,29 @@ class FlexibleArm:
             Configuration (default: straight arm, all zeros). Modal coordinates
             should be zero for a meaningful linearisation.
         joints : {"locked", "free"}
-            ``"locked"`` clamps every joint angle (infinitely stiff servos);
-            ``"free"`` leaves them unactuated (``tau = 0``), so the rigid-body
-            motions have zero frequency and are left out.
+            ``"locked"`` holds the actuated coordinates (joint angles, or motor
+            angles with flexible joints) fixed, as infinitely stiff servos would;
+            ``"free"`` leaves them unactuated (``tau = 0``): the ``n_links``
+            rigid-body motions have zero frequency and are left out.
 
         Returns
         -------
         ndarray
-            Increasing frequencies in rad/s, one per modal coordinate.
+            Increasing frequencies in rad/s: one per elastic degree of freedom
+            (modal coordinates, plus joint springs).
         """
         check_option(joints, "joints", _OWNER, ("locked", "free"))
         q = np.zeros(self.n_dof) if q is None else self._check_q(q)
-        M, K = self.mass_matrix(q), self.stiffness_matrix
-        N = self.n_links
+        M, K = self.mass_matrix(q).real, self.stiffness_matrix
+        keep = np.ones(self.n_dof, dtype=bool)
         if joints == "locked":
-            M, K = M[N:, N:], K[N:, N:]
-            if M.size == 0:
-                return np.zeros(0)
-            lam = scipy.linalg.eigh(K, M, eigvals_only=True)
-        else:
-            # Static condensation of the inertia onto the elastic coordinates:
-            # with tau = 0 the joint equations give theta_dd in terms of delta_dd.
-            if self.n_dof == N:
-                return np.zeros(0)
-            Mtt, Mtd, Mdd = M[:N, :N], M[:N, N:], M[N:, N:]
-            Meff = Mdd - Mtd.T @ np.linalg.solve(Mtt, Mtd)
-            lam = scipy.linalg.eigh(K[N:, N:], 0.5 * (Meff + Meff.T), eigvals_only=True)
+            keep[self.actuated_slice] = False
+        M, K = M[np.ix_(keep, keep)], K[np.ix_(keep, keep)]
+        if M.size == 0:
+            return np.zeros(0)
+        lam = scipy.linalg.eigh(K, M, eigvals_only=True)
+        if joints == "free":
+            lam = lam[self.n_links :]  # the rigid-body modes (zero eigenvalues)
         return np.sqrt(np.clip(lam, 0.0, None))  # type: ignore[no-any-return]
 
     # -------------------------------------------------------------- kinematics

@@ -15,7 +15,10 @@ import numpy as np
 
 from . import __version__
 from .arm import BOUNDARIES, FlexibleArm
+from .joints import LinearJoint, MakkarFriction, NonlinearJoint
 from .modes import NORMALIZATIONS, BeamModes
+
+JOINT_CHOICES = ("rigid", "linear", "nonlinear")
 
 __all__ = ["main"]
 
@@ -105,9 +108,9 @@ def _cmd_modes(args: argparse.Namespace) -> int:
                 "flexarm modes: error: a link needs --length, --flexural-rigidity and "
                 "--linear-density"
             )
-        if args.boundary is not None:
+        if args.boundary is not None or args.joints != "rigid":
             raise UsageError(
-                "flexarm modes: error: --boundary applies to the arm, not a single link"
+                "flexarm modes: error: --boundary and --joints apply to the arm, not a single link"
             )
         modes = BeamModes(
             args.length,
@@ -126,11 +129,17 @@ def _cmd_modes(args: argparse.Namespace) -> int:
             raise UsageError(
                 "flexarm modes: error: --tip-mass and --tip-inertia need a single link"
             )
+        joints: list[LinearJoint | NonlinearJoint] | None = None
+        if args.joints == "linear":
+            joints = [LinearJoint.default()] * 2
+        elif args.joints == "nonlinear":
+            joints = [NonlinearJoint.default(MakkarFriction.default())] * 2
         arm = FlexibleArm.paper(
             n_modes=args.n_modes if args.n_modes is not None else 1,
             boundary=args.boundary or "clamped-free",
             mode_normalization=args.normalization,
             mode_amplitude=args.amplitude,
+            joints=joints,
         )
         tables = [_mode_table(m) for m in arm.modes]
         locked = arm.natural_frequencies(joints="locked")
@@ -138,6 +147,7 @@ def _cmd_modes(args: argparse.Namespace) -> int:
         summary = {
             "arm": "paper",
             "boundary": arm.boundary,
+            "joints": args.joints,
             "links": tables,
             "arm_frequencies_locked_rad_s": locked.tolist(),
             "arm_frequencies_free_rad_s": free.tolist(),
@@ -146,8 +156,13 @@ def _cmd_modes(args: argparse.Namespace) -> int:
             _format_modes(f"Link {i + 1} of the paper's arm ({arm.boundary})", t)
             for i, t in enumerate(tables)
         )
-        text += "\n\nWhole arm, straight, linearised (rad/s | Hz):"
-        for label, w in (("joints locked", locked), ("joints free  ", free)):
+        kind = {
+            "rigid": "rigid joints",
+            "linear": "linear joints (default)",
+            "nonlinear": "nonlinear joints (default, stiffness a1 - ksw at rest)",
+        }
+        text += f"\n\nWhole arm, straight, {kind[args.joints]}, linearised (rad/s | Hz):"
+        for label, w in (("actuators locked", locked), ("actuators free  ", free)):
             text += f"\n  {label}: " + ", ".join(f"{x:.5f} | {x / (2 * np.pi):.5f}" for x in w)
     print(json.dumps(summary, indent=2) if args.json else text)
     return 0
@@ -183,6 +198,12 @@ def build_parser() -> argparse.ArgumentParser:
     modes.add_argument("--tip-mass", type=float, default=0.0, help="tip mass, kg (single link)")
     modes.add_argument(
         "--tip-inertia", type=float, default=0.0, help="tip inertia, kg m^2 (single link)"
+    )
+    modes.add_argument(
+        "--joints",
+        choices=JOINT_CHOICES,
+        default="rigid",
+        help="joints of the paper's arm: rigid, or the documented default flexible joints",
     )
     modes.add_argument("--normalization", choices=NORMALIZATIONS, default="mass")
     modes.add_argument(

@@ -25,6 +25,7 @@ __all__ = [
     "ArmArrays",
     "Workspace",
     "forward_dynamics",
+    "joint_forces",
     "make_workspace",
     "mass_and_bias",
 ]
@@ -34,6 +35,10 @@ F64 = NDArray[np.float64]
 # Columns of ArmArrays.link
 LEN, MASS, STATIC, INERTIA, HUB_MASS = 0, 1, 2, 3, 4
 N_LINK_COLUMNS = 5
+# Columns of ArmArrays.joint
+J_A1, J_A2, J_KSW, J_ASW, J_INERTIA, J_DAMPING, J_COUPLED = 0, 1, 2, 3, 4, 5, 6
+J_HAS_FRICTION, J_FRICTION_ON_MOTOR, J_G1 = 7, 8, 9
+N_JOINT_COLUMNS = 15
 
 
 class ArmArrays(NamedTuple):
@@ -57,6 +62,13 @@ class ArmArrays(NamedTuple):
         Diagonal of the stiffness (N m) and damping (N m s) matrices.
     payload : float array, shape (2,)
         Payload mass (kg) and rotary inertia (kg m**2) at the last link's tip.
+    joint : float array, shape (n_joints, 15)
+        Flexible joints (``n_joints`` is 0 for rigid joints or ``n_links``), one
+        row each: ``a1, a2, ksw, asw`` of the spring law (a linear joint is
+        ``k, 0, 0, 0``), reflected motor inertia ``J_m``, motor viscous damping,
+        rotor coupling flag (1: the rotor turns with its carrier link), friction
+        flag, friction side (0: link, 1: motor), Makkar ``g1..g6``. The motor
+        angle of joint ``i`` is ``q[mode_start[-1] + i]``.
     """
 
     mode_start: NDArray[np.int64]
@@ -69,6 +81,7 @@ class ArmArrays(NamedTuple):
     stiffness: F64
     damping: F64
     payload: F64
+    joint: F64
 
 
 class Workspace(NamedTuple):
@@ -92,7 +105,25 @@ def make_workspace(n_dof: int) -> Workspace:
     )
 
 
-@nb.njit(cache=True, fastmath=False, nogil=True)
+@nb.njit(cache=True, nogil=True, inline="always")
+def _add_rotor(M: F64, A: F64, joint: F64, i: int, m: int) -> None:  # pragma: no cover
+    """Add rotor ``i``'s kinetic energy ``1/2 J_m (carrier rate + dq_m)**2`` to ``M``.
+
+    ``A`` is the gradient of the carrier's absolute angle (constant in ``q``), so
+    the term adds no velocity forces. Without coupling only ``J_m dq_m**2 / 2``.
+    """
+    jm = joint[i, J_INERTIA]
+    M[m, m] += jm
+    if joint[i, J_COUPLED] != 0.0:
+        n = M.shape[0]
+        for r in range(n):
+            M[r, m] += jm * A[r]
+            M[m, r] += jm * A[r]
+            for c in range(n):
+                M[r, c] += jm * A[r] * A[c]
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
 def mass_and_bias(
     q: F64, dq: F64, model: ArmArrays, ws: Workspace
 ) -> None:  # pragma: no cover - compiled
@@ -122,6 +153,9 @@ def mass_and_bias(
             M[r, c] = 0.0
     bx = 0.0
     by = 0.0
+    has_joints = model.joint.shape[0] > 0
+    if has_joints:
+        _add_rotor(M, A, model.joint, 0, int(ms[n_links]))  # first rotor: carrier is the base
     for i in range(n_links):
         if i > 0:
             # Frame change from the tip of link i-1 to link i: gamma = theta_i + tip slope.
@@ -136,6 +170,9 @@ def mass_and_bias(
             bx, by = cg * bx + sg * by, -sg * bx + cg * by
             for r in range(ms[i - 1], ms[i]):
                 A[r] += tslope[r]
+            # A is now the angle gradient of the carrier of joint i's rotor
+            if has_joints:
+                _add_rotor(M, A, model.joint, i, int(ms[n_links]) + i)
             # hub mass at the joint, carried by the previous link's tip
             mh = lk[i, HUB_MASS]
             if mh != 0.0:
@@ -215,44 +252,80 @@ def mass_and_bias(
                 M[r, c] += jp * A[r] * A[c]
 
 
-@nb.njit(cache=True, nogil=True)
+@nb.njit(cache=True, nogil=True, inline="always")
 def _cholesky_solve(M: F64, b: F64, out: F64) -> None:  # pragma: no cover - compiled
-    """Solve ``M out = b`` for symmetric positive definite ``M`` (overwritten by its factor)."""
+    """Solve ``M out = b`` for symmetric positive definite ``M``.
+
+    ``M``'s lower triangle is overwritten by the Cholesky factor and its
+    diagonal by the factor's reciprocal diagonal (one division per row).
+    """
     n = M.shape[0]
     for j in range(n):
         s = M[j, j]
         for k in range(j):
             s -= M[j, k] * M[j, k]
-        d = np.sqrt(s)
-        M[j, j] = d
+        inv = 1.0 / np.sqrt(s)
+        M[j, j] = inv
         for i in range(j + 1, n):
             t = M[i, j]
             for k in range(j):
                 t -= M[i, k] * M[j, k]
-            M[i, j] = t / d
+            M[i, j] = t * inv
     for i in range(n):
         t = b[i]
         for k in range(i):
             t -= M[i, k] * out[k]
-        out[i] = t / M[i, i]
+        out[i] = t * M[i, i]
     for i in range(n - 1, -1, -1):
         t = out[i]
         for k in range(i + 1, n):
             t -= M[k, i] * out[k]
-        out[i] = t / M[i, i]
+        out[i] = t * M[i, i]
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def joint_forces(q: F64, dq: F64, tau: F64, model: ArmArrays, rhs: F64) -> None:  # pragma: no cover
+    """Add the flexible joints' generalised forces to ``rhs``.
+
+    Spring torque ``tau_s(q_m - q)`` on the link angle and its reaction on the
+    motor, the input torque and motor damping on the motor, friction on the
+    link (or motor) side.
+    """
+    jt = model.joint
+    m0 = model.mode_start[model.mode_start.shape[0] - 1]
+    for i in range(jt.shape[0]):
+        m = m0 + i
+        d = q[m] - q[i]
+        ts = (jt[i, J_A1] + jt[i, J_A2] * d * d) * d
+        if jt[i, J_KSW] != 0.0:
+            ts -= jt[i, J_KSW] * np.exp(-jt[i, J_ASW] * d * d) * d
+        rhs[i] += ts
+        rhs[m] += tau[i] - ts - jt[i, J_DAMPING] * dq[m]
+        if jt[i, J_HAS_FRICTION] != 0.0:
+            on_motor = jt[i, J_FRICTION_ON_MOTOR] != 0.0
+            k = m if on_motor else i
+            v = dq[k]
+            g = J_G1
+            f = (
+                jt[i, g] * (np.tanh(jt[i, g + 1] * v) - np.tanh(jt[i, g + 2] * v))
+                + jt[i, g + 3] * np.tanh(jt[i, g + 4] * v)
+                + jt[i, g + 5] * v
+            )
+            rhs[k] -= f
 
 
 @nb.njit(cache=True, nogil=True)
 def forward_dynamics(
     q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
 ) -> None:  # pragma: no cover - compiled
-    """``ddq = M(q)^-1 (B tau - C(q, dq) dq - K q - D dq)``, written into ``ddq``.
+    """``ddq = M(q)^-1 (B tau - C(q, dq) dq - K q - D dq + joint forces)``, into ``ddq``.
 
     Parameters
     ----------
     q, dq : ndarray, shape (n_dof,)
     tau : ndarray, shape (n_links,)
-        Joint torques in N m.
+        Joint torques in N m: on the joint angles for rigid joints, on the motor
+        angles for flexible joints.
     model : ArmArrays
     ws : Workspace
         Scratch (overwritten).
@@ -264,6 +337,9 @@ def forward_dynamics(
     rhs = ws.rhs
     for r in range(n):
         rhs[r] = -ws.bias[r] - model.stiffness[r] * q[r] - model.damping[r] * dq[r]
-    for r in range(tau.shape[0]):
-        rhs[r] += tau[r]
+    if model.joint.shape[0] > 0:
+        joint_forces(q, dq, tau, model, rhs)
+    else:
+        for r in range(tau.shape[0]):
+            rhs[r] += tau[r]
     _cholesky_solve(ws.mass, rhs, ddq)

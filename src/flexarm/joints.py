@@ -1,0 +1,324 @@
+r"""Flexible joints: the linear (Spong) and nonlinear (Ulrich) models, Makkar friction.
+
+A flexible joint couples a motor angle ``q_m`` (reflected to the link side of
+the gear) to the link angle ``q`` through a torsional spring of deflection
+``Delta = q_m - q``:
+
+* :class:`LinearJoint` (Spong 1987): ``tau_s = k Delta``.
+* :class:`NonlinearJoint` (Ulrich et al.): cubic stiffness with soft windup,
+
+  .. math:: \tau_s(\Delta) = a_1 \Delta + a_2 \Delta^3
+            - k_{sw} e^{-a_{sw} \Delta^2} \Delta,
+
+  whose stiffness ``d tau_s / d Delta`` is ``a1 - ksw`` at zero deflection and
+  tends to ``a1 + 3 a2 Delta**2`` outside the windup region
+  ``|Delta| ~ 1/sqrt(asw)`` (at its edge it overshoots ``a1`` by up to
+  ``ksw / e**1.5``, a property of this law) (Kircanski & Goldenberg observed this softening of
+  harmonic drives below about 1 N m). ``a1 > ksw`` keeps it positive.
+  Its potential is closed-form:
+  ``V = a1 Delta**2 / 2 + a2 Delta**4 / 4 - ksw (1 - exp(-asw Delta**2)) / (2 asw)``.
+* :class:`MakkarFriction`:
+  ``f(v) = g1 (tanh(g2 v) - tanh(g3 v)) + g4 tanh(g5 v) + g6 v`` — a Stribeck
+  hump (``g2 > g3``), smoothed Coulomb friction and viscous friction; the
+  static (breakaway) level is about ``g1 + g4``.
+
+Where friction acts is the arm's choice (:class:`flexarm.FlexibleArm`): on the
+link side of the spring (paper eq. 7) by default.
+
+Default parameters
+------------------
+The paper gives no numbers. ``LinearJoint.default()``,
+``NonlinearJoint.default()`` and ``MakkarFriction.default()`` describe a
+space-manipulator-class joint sized for the paper's arm (two 4.5 m links,
+about 81 kg m**2 about the shoulder when straight, joint torques of tens to a
+few hundred N m under the paper's gains):
+
+=========  ==============  =====================================================
+parameter  value           reasoning
+=========  ==============  =====================================================
+a1         1.0e4 N m/rad   harmonic-drive class (CSF-25 catalogue stiffness
+                           1.3e4–2.5e4 N m/rad); the rigid-link estimate of the
+                           shoulder's joint mode, sqrt(a1 / 81) = 11 rad/s, sits
+                           next to the links' 12.3 rad/s, so joint and link
+                           flexibility interact (``flexarm modes --joints
+                           linear`` prints the coupled frequencies)
+ksw        6.0e3 N m/rad   stiffness at zero deflection a1 - ksw = 0.4 a1, the
+                           low/high stiffness ratio of harmonic drives (~0.5)
+asw        1.6e7 1/rad**2  windup region |Delta| < 1/sqrt(asw) = 2.5e-4 rad, i.e.
+                           torques below (a1 - ksw) 2.5e-4 = 1 N m (Kircanski &
+                           Goldenberg)
+a2         4.0e7 N m/rad**3 hardening adds 10 % to the stiffness at 5e-3 rad
+                           (50 N m), a typical cubic fit of harmonic-drive curves
+J_m        0.3 kg m**2     rotor 3e-5 kg m**2 reflected through a 100:1 gear
+g1, g4     0.5, 1.0 N m    Stribeck excess and Coulomb level: breakaway about
+                           1.5 N m, 3 % of a 50 N m rated torque
+g2, g3     100, 10 s/rad   Stribeck velocity between 0.01 and 0.1 rad/s (as in
+                           Makkar et al.'s example, gamma = [0.25, 100, 10, 0.1,
+                           100, 0.01])
+g5         100 s/rad       Coulomb smoothing below 0.01 rad/s
+g6         0.5 N m s/rad   viscous friction of a greased gear
+=========  ==============  =====================================================
+
+``LinearJoint.default()`` uses ``k = a1`` and the same rotor.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ._validation import check_real
+
+__all__ = ["Joint", "LinearJoint", "MakkarFriction", "NonlinearJoint"]
+
+
+def _as_float_array(x: ArrayLike, name: str, owner: str) -> NDArray[np.float64]:
+    arr = np.asarray(x, dtype=float)
+    if arr.dtype.kind != "f":  # pragma: no cover - asarray(float) guarantees it
+        raise TypeError(f"The '{name}' parameter of {owner} must be numeric.")
+    return arr
+
+
+@dataclass(frozen=True)
+class MakkarFriction:
+    """Makkar et al.'s smooth friction model (all parameters >= 0).
+
+    ``f(v) = g1 (tanh(g2 v) - tanh(g3 v)) + g4 tanh(g5 v) + g6 v``.
+
+    Parameters
+    ----------
+    g1 : float
+        Stribeck excess level, N m.
+    g2, g3 : float
+        Rates (s/rad) whose difference shapes the Stribeck hump; ``g2 > g3``
+        for a hump that decays with speed.
+    g4 : float
+        Coulomb level, N m.
+    g5 : float
+        Coulomb smoothing rate, s/rad.
+    g6 : float
+        Viscous coefficient, N m s/rad.
+
+    Examples
+    --------
+    >>> f = MakkarFriction.default()
+    >>> float(f(0.0)), round(float(f(10.0)), 3)
+    (0.0, 6.0)
+    """
+
+    g1: float
+    g2: float
+    g3: float
+    g4: float
+    g5: float
+    g6: float
+
+    def __post_init__(self) -> None:
+        for name in ("g1", "g2", "g3", "g4", "g5", "g6"):
+            value = check_real(getattr(self, name), name, "MakkarFriction", nonnegative=True)
+            object.__setattr__(self, name, value)
+
+    @classmethod
+    def default(cls) -> MakkarFriction:
+        """The documented default (module docstring)."""
+        return cls(0.5, 100.0, 10.0, 1.0, 100.0, 0.5)
+
+    @property
+    def static_level(self) -> float:
+        """``g1 + g4``: the breakaway level the hump approaches at low speed, N m."""
+        return self.g1 + self.g4
+
+    def friction(self, velocity: ArrayLike) -> NDArray[np.float64]:
+        """Friction torque in N m at ``velocity`` (rad/s), any shape; odd in ``v``."""
+        v = _as_float_array(velocity, "velocity", "MakkarFriction")
+        out: NDArray[np.float64] = (
+            self.g1 * (np.tanh(self.g2 * v) - np.tanh(self.g3 * v))
+            + self.g4 * np.tanh(self.g5 * v)
+            + self.g6 * v
+        )
+        return out
+
+    __call__ = friction
+
+    @property
+    def params(self) -> NDArray[np.float64]:
+        """``(g1, ..., g6)`` as an array of shape (6,)."""
+        return np.array([self.g1, self.g2, self.g3, self.g4, self.g5, self.g6])
+
+
+@dataclass(frozen=True)
+class LinearJoint:
+    """A linear torsional spring between motor and link (Spong 1987).
+
+    Parameters
+    ----------
+    stiffness : float
+        ``k`` in N m/rad (> 0).
+    motor_inertia : float
+        Rotor inertia reflected to the link side, ``J_m`` in kg m**2 (> 0).
+    motor_damping : float
+        Viscous damping on the motor side, N m s/rad (>= 0).
+    friction : MakkarFriction or None
+        Joint friction (None: frictionless).
+
+    Examples
+    --------
+    >>> LinearJoint(100.0, 0.5).torque([0.0, 0.01])
+    array([0., 1.])
+    """
+
+    stiffness: float
+    motor_inertia: float
+    motor_damping: float = 0.0
+    friction: MakkarFriction | None = None
+
+    def __post_init__(self) -> None:
+        owner = "LinearJoint"
+        set_ = object.__setattr__
+        set_(self, "stiffness", check_real(self.stiffness, "stiffness", owner, positive=True))
+        set_(
+            self,
+            "motor_inertia",
+            check_real(self.motor_inertia, "motor_inertia", owner, positive=True),
+        )
+        set_(
+            self,
+            "motor_damping",
+            check_real(self.motor_damping, "motor_damping", owner, nonnegative=True),
+        )
+        _check_friction(self.friction, owner)
+
+    @classmethod
+    def default(cls) -> LinearJoint:
+        """``k = 1e4 N m/rad``, ``J_m = 0.3 kg m**2`` (module docstring)."""
+        return cls(1.0e4, 0.3)
+
+    def torque(self, deflection: ArrayLike) -> NDArray[np.float64]:
+        """Spring torque ``k Delta`` in N m for ``Delta = q_m - q`` (rad), any shape."""
+        return self.stiffness * _as_float_array(deflection, "deflection", "LinearJoint")
+
+    def tangent_stiffness(self, deflection: ArrayLike) -> NDArray[np.float64]:
+        """``d tau_s / d Delta`` in N m/rad (constant ``k``), same shape as ``deflection``."""
+        d = _as_float_array(deflection, "deflection", "LinearJoint")
+        return np.full_like(d, self.stiffness)
+
+    def potential(self, deflection: ArrayLike) -> NDArray[np.float64]:
+        """Spring energy ``k Delta**2 / 2`` in J."""
+        d = _as_float_array(deflection, "deflection", "LinearJoint")
+        return 0.5 * self.stiffness * d**2
+
+    @property
+    def spring_params(self) -> NDArray[np.float64]:
+        """``(a1, a2, ksw, asw)`` of the equivalent nonlinear law: ``(k, 0, 0, 0)``."""
+        return np.array([self.stiffness, 0.0, 0.0, 0.0])
+
+
+@dataclass(frozen=True)
+class NonlinearJoint:
+    """Cubic stiffness with soft windup (Ulrich et al.), module docstring.
+
+    Parameters
+    ----------
+    a1 : float
+        Linear stiffness, N m/rad (> ksw).
+    a2 : float
+        Cubic hardening, N m/rad**3 (>= 0).
+    ksw : float
+        Soft-windup stiffness reduction, N m/rad (>= 0, < a1).
+    asw : float
+        Soft-windup width parameter, 1/rad**2 (> 0).
+    motor_inertia : float
+        Reflected rotor inertia, kg m**2 (> 0).
+    friction : MakkarFriction or None
+        Joint friction (None: frictionless).
+    motor_damping : float
+        Viscous damping on the motor side, N m s/rad (>= 0).
+
+    Examples
+    --------
+    >>> j = NonlinearJoint.default()
+    >>> float(j.tangent_stiffness(0.0))
+    4000.0
+    """
+
+    a1: float
+    a2: float
+    ksw: float
+    asw: float
+    motor_inertia: float
+    friction: MakkarFriction | None = None
+    motor_damping: float = 0.0
+
+    def __post_init__(self) -> None:
+        owner = "NonlinearJoint"
+        set_ = object.__setattr__
+        set_(self, "a1", check_real(self.a1, "a1", owner, positive=True))
+        set_(self, "a2", check_real(self.a2, "a2", owner, nonnegative=True))
+        set_(self, "ksw", check_real(self.ksw, "ksw", owner, nonnegative=True))
+        set_(self, "asw", check_real(self.asw, "asw", owner, positive=True))
+        set_(
+            self,
+            "motor_inertia",
+            check_real(self.motor_inertia, "motor_inertia", owner, positive=True),
+        )
+        set_(
+            self,
+            "motor_damping",
+            check_real(self.motor_damping, "motor_damping", owner, nonnegative=True),
+        )
+        if not self.a1 > self.ksw:
+            raise ValueError(
+                f"The 'ksw' parameter of {owner} must be < a1 = {self.a1} (stiffness "
+                f"a1 - ksw must be positive at zero deflection). Got {self.ksw} instead."
+            )
+        _check_friction(self.friction, owner)
+
+    @classmethod
+    def default(cls, friction: MakkarFriction | None = None) -> NonlinearJoint:
+        """The documented space-manipulator-class joint (module docstring)."""
+        return cls(1.0e4, 4.0e7, 6.0e3, 1.6e7, 0.3, friction=friction)
+
+    def torque(self, deflection: ArrayLike) -> NDArray[np.float64]:
+        """Spring torque ``tau_s(Delta)`` in N m for ``Delta = q_m - q`` (rad), any shape."""
+        d = _as_float_array(deflection, "deflection", "NonlinearJoint")
+        out: NDArray[np.float64] = (
+            self.a1 * d + self.a2 * d**3 - self.ksw * np.exp(-self.asw * d * d) * d
+        )
+        return out
+
+    def tangent_stiffness(self, deflection: ArrayLike) -> NDArray[np.float64]:
+        """``d tau_s / d Delta`` in N m/rad, same shape as ``deflection``."""
+        d = _as_float_array(deflection, "deflection", "NonlinearJoint")
+        e = np.exp(-self.asw * d * d)
+        out: NDArray[np.float64] = (
+            self.a1 + 3 * self.a2 * d**2 - self.ksw * e * (1 - 2 * self.asw * d * d)
+        )
+        return out
+
+    def potential(self, deflection: ArrayLike) -> NDArray[np.float64]:
+        """Spring energy ``int_0^Delta tau_s`` in J (closed form)."""
+        d = _as_float_array(deflection, "deflection", "NonlinearJoint")
+        out: NDArray[np.float64] = (
+            0.5 * self.a1 * d**2
+            + 0.25 * self.a2 * d**4
+            + self.ksw * np.expm1(-self.asw * d * d) / (2 * self.asw)
+        )
+        return out
+
+    @property
+    def spring_params(self) -> NDArray[np.float64]:
+        """``(a1, a2, ksw, asw)``, shape (4,)."""
+        return np.array([self.a1, self.a2, self.ksw, self.asw])
+
+
+Joint = LinearJoint | NonlinearJoint
+
+
+def _check_friction(friction: object, owner: str) -> None:
+    if friction is not None and not isinstance(friction, MakkarFriction):
+        raise TypeError(
+            f"The 'friction' parameter of {owner} must be a MakkarFriction or None. "
+            f"Got {type(friction).__name__} instead."
+        )

@@ -1,0 +1,377 @@
+"""Flexible joints: the spring laws, Makkar friction, and arms with joints.
+
+Oracles: the two-inertia closed form sqrt(k (1/I + 1/J_m)), a zero-crossing
+period measured from a simulation, the paper's coupling matrix S, energy
+conservation and the power balance, convergence to the rigid-joint arm.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import flexarm as fa
+from flexarm.joints import LinearJoint, MakkarFriction, NonlinearJoint
+
+
+def simulate(arm, x0, t_end, torque=None, n_eval=201, rtol=1e-11, atol=1e-12):
+    n = arm.n_dof
+
+    def rhs(t, x):
+        tau = np.zeros(arm.n_links) if torque is None else torque(t)
+        return np.r_[x[n:], arm.forward_dynamics(x[:n], x[n:], tau, backend="compiled")]
+
+    sol = solve_ivp(
+        rhs,
+        (0, t_end),
+        x0,
+        method="DOP853",
+        rtol=rtol,
+        atol=atol,
+        t_eval=np.linspace(0, t_end, n_eval),
+    )
+    assert sol.success
+    return sol
+
+
+# ----------------------------------------------------------------- spring laws
+def test_linear_joint_torque_and_potential():
+    j = LinearJoint(250.0, 0.2)
+    d = np.linspace(-0.1, 0.1, 7)
+    np.testing.assert_allclose(j.torque(d), 250.0 * d)
+    np.testing.assert_allclose(j.potential(d), 125.0 * d**2)
+    np.testing.assert_allclose(j.tangent_stiffness(d), 250.0)
+
+
+def test_nonlinear_torque_matches_its_formula_and_is_odd():
+    j = NonlinearJoint(1.0e4, 4.0e7, 6.0e3, 1.6e7, 0.3)
+    d = np.linspace(-0.01, 0.01, 101)
+    expected = 1.0e4 * d + 4.0e7 * d**3 - 6.0e3 * np.exp(-1.6e7 * d**2) * d
+    np.testing.assert_allclose(j.torque(d), expected, rtol=1e-14, atol=1e-12)
+    np.testing.assert_allclose(j.torque(-d), -j.torque(d), rtol=0, atol=1e-12)
+    assert j.torque(np.array([[0.001]])).shape == (1, 1)
+
+
+def test_soft_windup_lowers_the_slope_near_zero():
+    j = NonlinearJoint.default()
+    eps = 1e-7
+    slope0 = (j.torque(eps) - j.torque(-eps)) / (2 * eps)
+    assert slope0 == pytest.approx(j.a1 - j.ksw, rel=1e-6)
+    assert slope0 < j.a1
+    # far outside the windup region the slope exceeds a1 (cubic hardening)
+    d = 10 / np.sqrt(j.asw)
+    assert (j.torque(d + eps) - j.torque(d - eps)) / (2 * eps) > j.a1
+
+
+def test_tangent_stiffness_and_potential_are_consistent_with_torque():
+    j = NonlinearJoint(300.0, 5e4, 200.0, 400.0, 0.1)
+    d = np.linspace(-0.2, 0.2, 41)
+    eps = 1e-6
+    fd_slope = (j.torque(d + eps) - j.torque(d - eps)) / (2 * eps)
+    np.testing.assert_allclose(j.tangent_stiffness(d), fd_slope, rtol=1e-7, atol=1e-6)
+    fd_torque = (j.potential(d + eps) - j.potential(d - eps)) / (2 * eps)
+    np.testing.assert_allclose(fd_torque, j.torque(d), rtol=1e-6, atol=1e-7)
+    assert j.potential(0.0) == 0.0
+    assert np.all(j.potential(d) >= 0)
+
+
+def test_makkar_friction_matches_formula_and_is_odd():
+    g = (0.25, 100.0, 10.0, 0.1, 100.0, 0.01)  # Makkar et al.'s example
+    f = MakkarFriction(*g)
+    v = np.linspace(-2, 2, 81)
+    expected = g[0] * (np.tanh(g[1] * v) - np.tanh(g[2] * v)) + g[3] * np.tanh(g[4] * v) + g[5] * v
+    np.testing.assert_allclose(f(v), expected, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(f.friction(-v), -f.friction(v), atol=1e-15)
+    assert f(0.0) == 0.0
+
+
+def test_makkar_static_level():
+    """With well separated rates the low-speed plateau is g1 + g4."""
+    f = MakkarFriction(0.4, 1e4, 1.0, 0.6, 1e4, 0.0)
+    v = np.geomspace(1e-4, 1e-1, 400)
+    assert f(v).max() == pytest.approx(f.static_level, rel=1e-2)
+    assert f.static_level == pytest.approx(1.0)
+    # the Stribeck hump: friction falls from the plateau towards the Coulomb level
+    assert f(5.0) == pytest.approx(0.6, rel=1e-3)
+
+
+# ------------------------------------------------------------ arms with joints
+def one_link_on_a_joint(joint, **kw):
+    return fa.FlexibleArm(
+        [fa.Link(1.2, 1.0, 2.0, n_modes=0, hub_inertia=0.1)], joints=[joint], **kw
+    )
+
+
+def test_one_rigid_link_on_a_linear_joint_oscillates_at_the_two_inertia_frequency():
+    k, jm = 40.0, 0.25
+    arm = one_link_on_a_joint(LinearJoint(k, jm))
+    inertia = 2.0 * 1.2**3 / 3 + 0.1
+    omega = np.sqrt(k * (1 / inertia + 1 / jm))
+    np.testing.assert_allclose(arm.natural_frequencies(joints="free"), [omega], rtol=1e-12)
+    np.testing.assert_allclose(
+        arm.natural_frequencies(joints="locked"), [np.sqrt(k / inertia)], rtol=1e-12
+    )
+    # and in the time domain: the spring deflection crosses zero every half period
+    sol = simulate(arm, np.array([0.0, 0.1, 0.0, 0.0]), 10 * 2 * np.pi / omega, n_eval=20001)
+    deflection = sol.y[1] - sol.y[0]
+    crossings = np.flatnonzero(np.diff(np.sign(deflection)) != 0)
+    t = sol.t
+    # linear interpolation of the crossing instants
+    tc = t[crossings] - deflection[crossings] * (t[crossings + 1] - t[crossings]) / (
+        deflection[crossings + 1] - deflection[crossings]
+    )
+    period = 2 * np.mean(np.diff(tc))
+    assert period == pytest.approx(2 * np.pi / omega, rel=1e-6)
+
+
+def test_coupling_matrix_is_the_papers_S():
+    """Rigid links: M's (theta, q_m) block is S = [[0, J_m2], [0, 0]] with coupling,
+    and zero with Spong's simplification."""
+    jm1, jm2 = 0.3, 0.2
+    links = [fa.Link(1.0, 1.0, 1.0, n_modes=0), fa.Link(0.8, 1.0, 1.0, n_modes=0)]
+    joints = [LinearJoint(100.0, jm1), LinearJoint(80.0, jm2)]
+    q = np.array([0.3, -0.7, 0.1, 0.2])
+    coupled = fa.FlexibleArm(links, joints=joints)
+    np.testing.assert_allclose(coupled.mass_matrix(q)[:2, 2:], [[0.0, jm2], [0.0, 0.0]], atol=1e-15)
+    np.testing.assert_allclose(np.diag(coupled.mass_matrix(q))[2:], [jm1, jm2])
+    spong = fa.FlexibleArm(links, joints=joints, rotor_coupling=False)
+    np.testing.assert_allclose(spong.mass_matrix(q)[:2, 2:], 0.0, atol=1e-15)
+    # the carried rotor adds its inertia to the link-side inertia about joint 1
+    rigid = fa.FlexibleArm(links)
+    np.testing.assert_allclose(
+        coupled.mass_matrix(q)[:2, :2] - rigid.mass_matrix(q[:2]), [[jm2, 0], [0, 0]], atol=1e-14
+    )
+    np.testing.assert_allclose(spong.mass_matrix(q)[:2, :2], rigid.mass_matrix(q[:2]), atol=1e-14)
+
+
+def test_rotor_on_a_flexible_link_turns_with_the_tip_slope():
+    """The second rotor's carrier is link 1's deflected tip: its coupling row
+    is the gradient of theta_1 + w_1'(L)."""
+    jm2 = 0.2
+    arm = fa.FlexibleArm(
+        [fa.Link(1.0, 5.0, 1.0, n_modes=2), fa.Link(0.8, 3.0, 1.0, n_modes=1)],
+        joints=[LinearJoint(100.0, 0.3), LinearJoint(80.0, jm2)],
+    )
+    M = arm.mass_matrix(np.zeros(arm.n_dof))
+    row = np.zeros(arm.n_dof)
+    row[0] = 1.0
+    row[arm.modal_slice(0)] = arm.modes[0].tip_slope
+    m2 = arm.motor_slice.start + 1
+    np.testing.assert_allclose(M[:m2, m2], jm2 * row[:m2], atol=1e-14)
+
+
+FLEX_ARMS = {
+    "paper-nonlinear": lambda friction=None, **kw: fa.FlexibleArm.paper(
+        joints=[NonlinearJoint(1.0e3, 4.0e6, 6.0e2, 1.6e5, 0.3, friction=friction)] * 2, **kw
+    ),
+    "three-rigid-links-linear": lambda friction=None, **kw: fa.FlexibleArm(
+        [fa.Link(1.0, 1.0, 1.0, n_modes=0, hub_mass=0.2)] * 3,
+        joints=[LinearJoint(60.0, 0.05, friction=friction)] * 3,
+        payload_mass=0.1,
+        **kw,
+    ),
+    "two-flexible-links-clamped-mass": lambda friction=None, **kw: fa.FlexibleArm(
+        [fa.Link(1.0, 5.0, 1.0, n_modes=2), fa.Link(0.8, 3.0, 0.7, n_modes=2, hub_mass=0.3)],
+        joints=[NonlinearJoint(80.0, 1e3, 30.0, 50.0, 0.05, friction=friction)] * 2,
+        boundary="clamped-mass",
+        **kw,
+    ),
+}
+
+
+def random_state(arm, rng, scale=0.05):
+    q = rng.normal(size=arm.n_dof) * scale
+    q[: arm.n_links] = rng.uniform(-np.pi, np.pi, arm.n_links)
+    q[arm.motor_slice] = q[: arm.n_links] + rng.normal(size=arm.n_links) * scale
+    return q, rng.normal(size=arm.n_dof) * 0.5
+
+
+@pytest.mark.parametrize("name", sorted(FLEX_ARMS))
+@pytest.mark.parametrize("friction_side", ["link", "motor"])
+def test_compiled_matches_numpy_with_joints(name, friction_side):
+    arm = FLEX_ARMS[name](friction=MakkarFriction.default(), joint_friction=friction_side)
+    rng = np.random.default_rng(20)
+    for _ in range(5):
+        q, dq = random_state(arm, rng)
+        tau = rng.normal(size=arm.n_links)
+        ref = arm.forward_dynamics(q, dq, tau)
+        got = arm.forward_dynamics(q, dq, tau, backend="compiled")
+        np.testing.assert_allclose(got, ref, rtol=1e-10, atol=1e-10 * np.abs(ref).max())
+
+
+@pytest.mark.parametrize("name", sorted(FLEX_ARMS))
+def test_joint_arm_structure(name):
+    arm = FLEX_ARMS[name]()
+    rng = np.random.default_rng(21)
+    q, dq = random_state(arm, rng)
+    M = arm.mass_matrix(q)
+    assert np.linalg.eigvalsh(M).min() > 0
+    np.testing.assert_allclose(arm.coriolis(q, dq) @ dq, arm.velocity_terms(q, dq), atol=1e-10)
+    B = arm.input_matrix
+    np.testing.assert_array_equal(B[arm.motor_slice], np.eye(arm.n_links))
+    assert arm.coordinate_names[-1] == f"qm{arm.n_links}"
+
+
+@pytest.mark.parametrize("name", sorted(FLEX_ARMS))
+def test_energy_conserved_with_conservative_joints(name):
+    arm = FLEX_ARMS[name]()
+    rng = np.random.default_rng(22)
+    q0, dq0 = random_state(arm, rng)
+    e0 = sum(arm.energy(q0, dq0))
+    sol = simulate(arm, np.r_[q0, dq0], 0.5, n_eval=11)
+    n = arm.n_dof
+    energies = np.array([sum(arm.energy(x[:n], x[n:])) for x in sol.y.T])
+    assert np.abs(energies - e0).max() <= 1e-8 * e0
+    springs = [arm.energy(x[:n], x[n:])[1] for x in sol.y.T]
+    assert max(springs) - min(springs) > 1e-4 * e0  # energy really moved through the springs
+
+
+@pytest.mark.parametrize("friction_side", ["link", "motor"])
+def test_energy_falls_and_never_rises_with_friction(friction_side):
+    arm = FLEX_ARMS["three-rigid-links-linear"](
+        friction=MakkarFriction(0.05, 100.0, 10.0, 0.1, 100.0, 0.02), joint_friction=friction_side
+    )
+    rng = np.random.default_rng(23)
+    q0, dq0 = random_state(arm, rng)
+    sol = simulate(arm, np.r_[q0, dq0], 2.0, n_eval=201)
+    n = arm.n_dof
+    energies = np.array([sum(arm.energy(x[:n], x[n:])) for x in sol.y.T])
+    assert np.all(np.diff(energies) <= 1e-9 * energies[0])
+    assert energies[-1] < 0.8 * energies[0]
+
+
+def test_power_balance_with_friction_and_motor_damping():
+    """dE/dt = dq' B tau - dq' D dq - sum f(v_i) v_i (friction on the link side)."""
+    friction = MakkarFriction.default()
+    arm = fa.FlexibleArm(
+        [fa.Link(1.0, 5.0, 1.0, n_modes=2, modal_damping=0.02)] * 2,
+        joints=[NonlinearJoint(80.0, 1e3, 30.0, 50.0, 0.05, friction=friction, motor_damping=0.3)]
+        * 2,
+    )
+    rng = np.random.default_rng(24)
+    q, dq = random_state(arm, rng)
+    tau = rng.normal(size=2)
+    ddq = arm.forward_dynamics(q, dq, tau)
+    M = arm.mass_matrix(q)
+    mdot = np.einsum("kij,k->ij", arm.mass_matrix_derivatives(q), dq)
+    m0 = arm.motor_slice.start
+    spring_power = sum(
+        float(jt.torque(q[m0 + i] - q[i])) * (dq[m0 + i] - dq[i]) for i, jt in enumerate(arm.joints)
+    )
+    modal_power = q @ np.diag(arm.arrays.stiffness) @ dq
+    de = dq @ M @ ddq + 0.5 * dq @ mdot @ dq + modal_power + spring_power
+    power = (
+        dq @ arm.input_matrix @ tau
+        - dq @ arm.damping_matrix @ dq
+        - sum(float(friction(dq[i])) * dq[i] for i in range(2))
+    )
+    assert de == pytest.approx(power, rel=1e-10, abs=1e-10)
+
+
+def test_stiff_joints_approach_the_rigid_joint_arm():
+    """As k grows the motor locks to its link: the limit is the rigid-joint arm
+    whose hubs carry the rotor inertias (rotor i turns with link i)."""
+    jm = 0.05
+    links = [fa.Link(1.0, 1.0, 1.0, n_modes=0)] * 2
+
+    def torque(t):
+        return np.array([0.4, -0.15]) * np.sin(np.pi * t) ** 2
+
+    with_rotors = [fa.Link(1.0, 1.0, 1.0, n_modes=0, hub_inertia=jm)] * 2
+    rigid = simulate(fa.FlexibleArm(with_rotors), np.zeros(4), 1.0, torque, n_eval=11).y[:2]
+    errors = []
+    for k in (1e2, 1e3, 1e4):
+        arm = fa.FlexibleArm(links, joints=[LinearJoint(k, jm)] * 2)
+        errors.append(
+            np.abs(simulate(arm, np.zeros(8), 1.0, torque, n_eval=11).y[:2] - rigid).max()
+        )
+    assert errors[0] > errors[1] > errors[2]
+    assert errors[0] / errors[1] > 5 and errors[1] / errors[2] > 5
+
+
+def test_linearised_stiffness_uses_the_windup_slope():
+    arm = paper_arm_with_default_joints()
+    K = arm.stiffness_matrix
+    k0 = NonlinearJoint.default().a1 - NonlinearJoint.default().ksw
+    m = arm.motor_slice.start
+    np.testing.assert_allclose(K[[0, m], :][:, [0, m]], [[k0, -k0], [-k0, k0]])
+
+
+def paper_arm_with_default_joints():
+    return fa.FlexibleArm.paper(joints=[NonlinearJoint.default(MakkarFriction.default())] * 2)
+
+
+def test_default_parameters_are_documented_values():
+    j = NonlinearJoint.default()
+    assert (j.a1, j.a2, j.ksw, j.asw, j.motor_inertia) == (1.0e4, 4.0e7, 6.0e3, 1.6e7, 0.3)
+    assert j.a1 > j.ksw
+    # the windup region holds torques below about 1 N m
+    assert float(j.torque(1 / np.sqrt(j.asw))) == pytest.approx(
+        1.0 + 6e3 * (1 - np.exp(-1)) / 4e3, rel=0.2
+    )
+    f = MakkarFriction.default()
+    assert f.static_level == pytest.approx(1.5)
+    assert LinearJoint.default().stiffness == j.a1
+
+
+# ------------------------------------------------------------------ bad input
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"a1": 100.0, "ksw": 100.0}, ValueError, "'ksw'.*< a1"),
+        ({"a1": 100.0, "ksw": 150.0}, ValueError, "'ksw'"),
+        ({"a1": -1.0}, ValueError, "'a1'"),
+        ({"a1": float("nan")}, ValueError, "'a1'"),
+        ({"a2": -1.0}, ValueError, "'a2'"),
+        ({"asw": 0.0}, ValueError, "'asw'"),
+        ({"ksw": -1.0}, ValueError, "'ksw'"),
+        ({"motor_inertia": 0.0}, ValueError, "'motor_inertia'"),
+        ({"motor_inertia": float("inf")}, ValueError, "'motor_inertia'"),
+        ({"motor_damping": -0.1}, ValueError, "'motor_damping'"),
+        ({"friction": "makkar"}, TypeError, "'friction'"),
+        ({"a1": "1e4"}, TypeError, "'a1'"),
+    ],
+)
+def test_nonlinear_joint_rejects_bad_parameters(kwargs, error, match):
+    params = {"a1": 1e4, "a2": 4e7, "ksw": 6e3, "asw": 1.6e7, "motor_inertia": 0.3} | kwargs
+    with pytest.raises(error, match=match):
+        NonlinearJoint(**params)
+
+
+@pytest.mark.parametrize(
+    ("args", "match"),
+    [
+        ((0.0, 0.3), "'stiffness'"),
+        ((-5.0, 0.3), "'stiffness'"),
+        ((10.0, -0.3), "'motor_inertia'"),
+        ((float("nan"), 0.3), "'stiffness'"),
+    ],
+)
+def test_linear_joint_rejects_bad_parameters(args, match):
+    with pytest.raises(ValueError, match=match):
+        LinearJoint(*args)
+
+
+@pytest.mark.parametrize("index", range(6))
+@pytest.mark.parametrize("value", [-0.1, float("nan"), float("inf")])
+def test_friction_rejects_bad_parameters(index, value):
+    g = [0.25, 100.0, 10.0, 0.1, 100.0, 0.01]
+    g[index] = value
+    with pytest.raises(ValueError, match=f"'g{index + 1}' parameter of MakkarFriction"):
+        MakkarFriction(*g)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"joints": [LinearJoint(1.0, 1.0)]}, ValueError, "one joint per link"),
+        ({"joints": [LinearJoint(1.0, 1.0), "spring"]}, TypeError, "position 1"),
+        ({"joints": 5}, TypeError, "'joints'"),
+        ({"joint_friction": "both"}, ValueError, "'joint_friction'"),
+        ({"rotor_coupling": 1}, TypeError, "'rotor_coupling'"),
+    ],
+)
+def test_arm_rejects_bad_joint_options(kwargs, error, match):
+    with pytest.raises(error, match=match):
+        fa.FlexibleArm.paper(**kwargs)
