@@ -54,7 +54,7 @@ import numba as nb
 import numpy as np
 
 import flexarm
-from flexarm import FlexibleArm, Link, kernels
+from flexarm import FlexibleArm, Link, MakkarFriction, NonlinearJoint, kernels
 
 N_STATES = 1024  # states cycled by the compiled driver (power of two)
 N_PY_STATES = 256  # states cycled by the Python-level loops
@@ -66,11 +66,16 @@ LENGTH, EI, RHO = 4.5, 1676.0, 0.335  # the paper's links (Sasiadek et al. 2014)
 
 # ----------------------------------------------------------------------- arms
 def make_arms() -> dict[str, FlexibleArm]:
-    """The three arms measured, keyed by a short label."""
+    """The arms measured, keyed by a short label."""
+    joints = [NonlinearJoint.default(MakkarFriction.default())] * 2
     return {
         "rigid 2-link (n_dof 2)": FlexibleArm([Link(LENGTH, EI, RHO, n_modes=0)] * 2),
         "paper, 1 mode/link (n_dof 4)": FlexibleArm.paper(),
         "paper, 2 modes/link (n_dof 6)": FlexibleArm.paper(n_modes=2),
+        "paper + nonlinear joints, 1 mode/link (n_dof 6)": FlexibleArm.paper(joints=joints),
+        "paper + nonlinear joints, 2 modes/link (n_dof 8)": FlexibleArm.paper(
+            n_modes=2, joints=joints
+        ),
     }
 
 
@@ -87,6 +92,10 @@ def random_states(
     dq[:, :nl] = rng.uniform(-2.0, 2.0, (n, nl))
     q[:, nl:] = rng.uniform(-0.05, 0.05, (n, nd - nl))
     dq[:, nl:] = rng.uniform(-0.5, 0.5, (n, nd - nl))
+    if arm.has_flexible_joints:  # motor angles near their links: deflections of mrad
+        m = arm.motor_slice
+        q[:, m] = q[:, :nl] + rng.uniform(-2e-3, 2e-3, (n, nl))
+        dq[:, m] = dq[:, :nl] + rng.uniform(-0.1, 0.1, (n, nl))
     tau = rng.uniform(-5.0, 5.0, (n, nl))
     return q, dq, tau
 

@@ -314,7 +314,7 @@ def joint_forces(q: F64, dq: F64, tau: F64, model: ArmArrays, rhs: F64) -> None:
             rhs[k] -= f
 
 
-@nb.njit(cache=True, nogil=True)
+@nb.njit(cache=True, nogil=True, inline="always")
 def forward_dynamics(
     q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
 ) -> None:  # pragma: no cover - compiled
