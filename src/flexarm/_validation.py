@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
@@ -24,6 +24,8 @@ __all__ = [
     "check_int",
     "check_option",
     "check_real",
+    "check_sequence_of",
+    "validate_real_fields",
 ]
 
 
@@ -76,6 +78,44 @@ def check_real(
     if nonnegative and not x >= 0.0:
         raise ValueError(_fail(name, owner, ">= 0", x))
     return x
+
+
+def validate_real_fields(
+    obj: Any,
+    owner: str,
+    *,
+    positive: Iterable[str] = (),
+    nonnegative: Iterable[str] = (),
+) -> None:
+    """Check the named fields of a frozen dataclass and store them as floats."""
+    for names, kind in ((positive, "positive"), (nonnegative, "nonnegative")):
+        for name in names:
+            value = check_real(getattr(obj, name), name, owner, **{kind: True})
+            object.__setattr__(obj, name, value)
+
+
+def check_sequence_of(
+    value: Any, name: str, owner: str, types: type | tuple[type, ...], what: str
+) -> tuple[Any, ...]:
+    """Return ``value`` as a tuple whose items are all instances of ``types``.
+
+    A single instance is accepted as a one-item sequence. ``what`` names the
+    item types in the message ("Link", "LinearJoint or NonlinearJoint").
+    """
+    if isinstance(value, types):
+        return (value,)
+    if not isinstance(value, Sequence) or isinstance(value, str):
+        raise TypeError(
+            _fail(name, owner, f"a sequence of {what}", _Described(type(value).__name__))
+        )
+    items = tuple(value)
+    for k, item in enumerate(items):
+        if not isinstance(item, types):
+            raise TypeError(
+                f"The '{name}' parameter of {owner} must hold {what} objects. "
+                f"Got {type(item).__name__} at position {k} instead."
+            )
+    return items
 
 
 def check_int(value: Any, name: str, owner: str, *, minimum: int | None = None) -> int:

@@ -79,7 +79,14 @@ import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from . import kernels
-from ._validation import check_array, check_int, check_option, check_real
+from ._validation import (
+    check_array,
+    check_int,
+    check_option,
+    check_real,
+    check_sequence_of,
+    validate_real_fields,
+)
 from .joints import LinearJoint, NonlinearJoint
 from .link import Link
 from .modes import NORMALIZATIONS, BeamModes
@@ -141,28 +148,13 @@ class FlexibleArm:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        links: Any = self.links
-        if isinstance(links, Link):
-            links = (links,)
-        if not isinstance(links, Sequence) or isinstance(links, str):
-            raise TypeError(
-                f"The 'links' parameter of {_OWNER} must be a sequence of Link. "
-                f"Got {type(links).__name__} instead."
-            )
-        links = tuple(links)
+        links = check_sequence_of(self.links, "links", _OWNER, Link, "Link")
         if len(links) == 0:
             raise ValueError(
                 f"The 'links' parameter of {_OWNER} must hold >= 1 Link. Got 0 instead."
             )
-        for k, lk in enumerate(links):
-            if not isinstance(lk, Link):
-                raise TypeError(
-                    f"The 'links' parameter of {_OWNER} must hold Link objects. "
-                    f"Got {type(lk).__name__} at position {k} instead."
-                )
         set_(self, "links", links)
-        for name in ("payload_mass", "payload_inertia"):
-            set_(self, name, check_real(getattr(self, name), name, _OWNER, nonnegative=True))
+        validate_real_fields(self, _OWNER, nonnegative=("payload_mass", "payload_inertia"))
         check_option(self.boundary, "boundary", _OWNER, BOUNDARIES)
         if self.joints is not None:
             set_(self, "joints", self._check_joints(self.joints, len(links)))
@@ -209,25 +201,13 @@ class FlexibleArm:
 
     @staticmethod
     def _check_joints(joints: Any, n_links: int) -> tuple[LinearJoint | NonlinearJoint, ...]:
-        if isinstance(joints, LinearJoint | NonlinearJoint):
-            joints = (joints,)
-        if not isinstance(joints, Sequence) or isinstance(joints, str):
-            raise TypeError(
-                f"The 'joints' parameter of {_OWNER} must be a sequence of LinearJoint or "
-                f"NonlinearJoint. Got {type(joints).__name__} instead."
-            )
-        joints = tuple(joints)
+        what = "LinearJoint or NonlinearJoint"
+        joints = check_sequence_of(joints, "joints", _OWNER, (LinearJoint, NonlinearJoint), what)
         if len(joints) != n_links:
             raise ValueError(
                 f"The 'joints' parameter of {_OWNER} must hold one joint per link "
                 f"({n_links}). Got {len(joints)} instead."
             )
-        for k, jt in enumerate(joints):
-            if not isinstance(jt, LinearJoint | NonlinearJoint):
-                raise TypeError(
-                    f"The 'joints' parameter of {_OWNER} must hold LinearJoint or "
-                    f"NonlinearJoint objects. Got {type(jt).__name__} at position {k} instead."
-                )
         checked: tuple[LinearJoint | NonlinearJoint, ...] = joints
         return checked
 

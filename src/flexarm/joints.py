@@ -69,7 +69,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._validation import check_real
+from ._validation import validate_real_fields
 
 __all__ = ["Joint", "LinearJoint", "MakkarFriction", "NonlinearJoint"]
 
@@ -116,9 +116,9 @@ class MakkarFriction:
     g6: float
 
     def __post_init__(self) -> None:
-        for name in ("g1", "g2", "g3", "g4", "g5", "g6"):
-            value = check_real(getattr(self, name), name, "MakkarFriction", nonnegative=True)
-            object.__setattr__(self, name, value)
+        validate_real_fields(
+            self, "MakkarFriction", nonnegative=("g1", "g2", "g3", "g4", "g5", "g6")
+        )
 
     @classmethod
     def default(cls) -> MakkarFriction:
@@ -176,17 +176,8 @@ class LinearJoint:
 
     def __post_init__(self) -> None:
         owner = "LinearJoint"
-        set_ = object.__setattr__
-        set_(self, "stiffness", check_real(self.stiffness, "stiffness", owner, positive=True))
-        set_(
-            self,
-            "motor_inertia",
-            check_real(self.motor_inertia, "motor_inertia", owner, positive=True),
-        )
-        set_(
-            self,
-            "motor_damping",
-            check_real(self.motor_damping, "motor_damping", owner, nonnegative=True),
+        validate_real_fields(
+            self, owner, positive=("stiffness", "motor_inertia"), nonnegative=("motor_damping",)
         )
         _check_friction(self.friction, owner)
 
@@ -253,20 +244,11 @@ class NonlinearJoint:
 
     def __post_init__(self) -> None:
         owner = "NonlinearJoint"
-        set_ = object.__setattr__
-        set_(self, "a1", check_real(self.a1, "a1", owner, positive=True))
-        set_(self, "a2", check_real(self.a2, "a2", owner, nonnegative=True))
-        set_(self, "ksw", check_real(self.ksw, "ksw", owner, nonnegative=True))
-        set_(self, "asw", check_real(self.asw, "asw", owner, positive=True))
-        set_(
+        validate_real_fields(
             self,
-            "motor_inertia",
-            check_real(self.motor_inertia, "motor_inertia", owner, positive=True),
-        )
-        set_(
-            self,
-            "motor_damping",
-            check_real(self.motor_damping, "motor_damping", owner, nonnegative=True),
+            owner,
+            positive=("a1", "asw", "motor_inertia"),
+            nonnegative=("a2", "ksw", "motor_damping"),
         )
         if not self.a1 > self.ksw:
             raise ValueError(

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ._validation import check_int, check_real
+from ._validation import check_int, validate_real_fields
 
 __all__ = ["Link"]
 
@@ -50,13 +50,13 @@ class Link:
     modal_damping: float = 0.0
 
     def __post_init__(self) -> None:
-        owner = "Link"
-        set_ = object.__setattr__
-        for name in ("length", "flexural_rigidity", "linear_density"):
-            set_(self, name, check_real(getattr(self, name), name, owner, positive=True))
-        set_(self, "n_modes", check_int(self.n_modes, "n_modes", owner, minimum=0))
-        for name in ("hub_mass", "hub_inertia", "modal_damping"):
-            set_(self, name, check_real(getattr(self, name), name, owner, nonnegative=True))
+        validate_real_fields(
+            self,
+            "Link",
+            positive=("length", "flexural_rigidity", "linear_density"),
+            nonnegative=("hub_mass", "hub_inertia", "modal_damping"),
+        )
+        object.__setattr__(self, "n_modes", check_int(self.n_modes, "n_modes", "Link", minimum=0))
 
     @property
     def mass(self) -> float:

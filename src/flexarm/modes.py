@@ -61,7 +61,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 
-from ._validation import check_array, check_int, check_option, check_real
+from ._validation import (
+    check_array,
+    check_int,
+    check_option,
+    check_real,
+    validate_real_fields,
+)
 
 __all__ = [
     "NORMALIZATIONS",
@@ -301,24 +307,13 @@ class BeamModes:
     def __post_init__(self) -> None:
         owner = "BeamModes"
         set_ = object.__setattr__
-        set_(self, "length", check_real(self.length, "length", owner, positive=True))
-        set_(
+        validate_real_fields(
             self,
-            "flexural_rigidity",
-            check_real(self.flexural_rigidity, "flexural_rigidity", owner, positive=True),
-        )
-        set_(
-            self,
-            "linear_density",
-            check_real(self.linear_density, "linear_density", owner, positive=True),
+            owner,
+            positive=("length", "flexural_rigidity", "linear_density"),
+            nonnegative=("tip_mass", "tip_inertia"),
         )
         set_(self, "n_modes", check_int(self.n_modes, "n_modes", owner, minimum=0))
-        set_(self, "tip_mass", check_real(self.tip_mass, "tip_mass", owner, nonnegative=True))
-        set_(
-            self,
-            "tip_inertia",
-            check_real(self.tip_inertia, "tip_inertia", owner, nonnegative=True),
-        )
         check_option(self.normalization, "normalization", owner, NORMALIZATIONS)
         set_(self, "amplitude", check_real(self.amplitude, "amplitude", owner, positive=True))
         lam = clamped_mass_roots(self.n_modes, self.mass_ratio, self.inertia_ratio)
