@@ -28,6 +28,7 @@ __all__ = [
     "joint_forces",
     "make_workspace",
     "mass_and_bias",
+    "point_kinematics",
 ]
 
 F64 = NDArray[np.float64]
@@ -314,7 +315,7 @@ def joint_forces(q: F64, dq: F64, tau: F64, model: ArmArrays, rhs: F64) -> None:
             rhs[k] -= f
 
 
-@nb.njit(cache=True, nogil=True, inline="always")
+@nb.njit(cache=True, nogil=True)
 def forward_dynamics(
     q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
 ) -> None:  # pragma: no cover - compiled
@@ -343,3 +344,61 @@ def forward_dynamics(
         for r in range(tau.shape[0]):
             rhs[r] += tau[r]
     _cholesky_solve(ws.mass, rhs, ddq)
+
+
+@nb.njit(cache=True, nogil=True)
+def point_kinematics(
+    q: F64, dq: F64, model: ArmArrays, link: int, distance: float, phi: F64, out: F64
+) -> None:  # pragma: no cover - compiled
+    """Position and velocity of a point on a link, deflection included.
+
+    Parameters
+    ----------
+    q, dq : ndarray, shape (n_dof,)
+    model : ArmArrays
+    link : int
+        0-based link index.
+    distance : float
+        Distance along the undeformed link from its joint, m.
+    phi : ndarray, shape (n_modes of ``link``,)
+        Mode shapes of ``link`` evaluated at ``distance``.
+    out : ndarray, shape (4,)
+        Written: ``x, y`` (m) and ``vx, vy`` (m/s) in the base frame.
+    """
+    ms = model.mode_start
+    alpha = 0.0
+    alpha_dot = 0.0
+    px = 0.0
+    py = 0.0
+    vx = 0.0
+    vy = 0.0
+    for i in range(link + 1):
+        alpha += q[i]
+        alpha_dot += dq[i]
+        a0, a1 = ms[i], ms[i + 1]
+        w = 0.0
+        wd = 0.0
+        if i < link:
+            x = model.link[i, LEN]
+            for r in range(a0, a1):
+                w += model.tip_deflection[r] * q[r]
+                wd += model.tip_deflection[r] * dq[r]
+        else:
+            x = distance
+            for r in range(a0, a1):
+                w += phi[r - a0] * q[r]
+                wd += phi[r - a0] * dq[r]
+        c, s = np.cos(alpha), np.sin(alpha)
+        px += c * x - s * w
+        py += s * x + c * w
+        # d/dt R(alpha) [x, w] = alpha_dot R S [x, w] + R [0, wd],  S = [[0, -1], [1, 0]]
+        vx += alpha_dot * (-c * w - s * x) - s * wd
+        vy += alpha_dot * (-s * w + c * x) + c * wd
+        if i < link:
+            for r in range(a0, a1):
+                alpha += model.tip_slope[r] * q[r]
+                alpha_dot += model.tip_slope[r] * dq[r]
+    out[0] = px
+    out[1] = py
+    out[2] = vx
+    out[3] = vy

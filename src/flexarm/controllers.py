@@ -1,0 +1,337 @@
+"""Feedback laws: joint-space PD, operational-space Jacobian-transpose PD, and yours.
+
+Every controller is the same thing to the simulator: a compiled function
+
+    control(t, y, r, params, state, tau)
+
+of the time (s), the measurement ``y`` and reference ``r`` (layouts in
+:mod:`flexarm.signals`), a parameter vector, a mutable state vector (for
+integrators, filters, adaptation) and the output torques ``tau`` (N m, one per
+joint; written in place). The simulator calls it once per control period from
+its compiled loop through a C function pointer (``numba.cfunc``), so one cached
+loop serves every controller; torque saturation is applied by the simulator.
+
+Built in:
+
+* :class:`JointPD` — ``tau = Kp (theta_r - theta) + Kd (dtheta_r - dtheta)``.
+* :class:`JacobianTransposePD` — paper eq. 11,
+  ``tau = J(theta)' [Kp (x_r - x) + Kd (v_r - v)]`` with ``J`` the rigid Jacobian of
+  the measured (collocated) angles and ``x, v`` from the sensor in use.
+  ``JacobianTransposePD.from_arm(arm, zeta=0.707)`` gives the paper's gains
+  ``Kp = omega_1**2 I``, ``Kd = 2 zeta omega_1 I`` (150.79 and 17.364 for the
+  paper's arm).
+
+Your own: write ``f(t, y, r, params, state, tau)`` with ``@numba.njit`` and wrap
+it in :class:`CompiledController`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numba as nb
+import numpy as np
+from numba import carray, types  # type: ignore[attr-defined]
+from numpy.typing import ArrayLike, NDArray
+
+from ._validation import check_array, check_real
+
+__all__ = [
+    "CONTROL_SIGNATURE",
+    "CompiledController",
+    "Controller",
+    "JacobianTransposePD",
+    "JointPD",
+    "wrap_control_function",
+]
+
+_P = types.CPointer(types.float64)  # type: ignore[no-untyped-call]
+CONTROL_SIGNATURE = types.void(
+    types.float64, _P, types.intp, _P, types.intp, _P, types.intp, _P, types.intp, _P, types.intp
+)
+"""``void(t, y*, ny, r*, nr, params*, np, state*, ns, tau*, ntau)``"""
+
+
+def wrap_control_function(fn: Any, cache: bool = False) -> Any:
+    """Turn ``fn(t, y, r, params, state, tau)`` (a ``numba.njit`` function of
+    arrays) into a ``numba.cfunc`` with :data:`CONTROL_SIGNATURE`."""
+
+    def wrapper(t, y, ny, r, nr, p, n_p, s, ns, tau, nt):  # type: ignore[no-untyped-def]
+        fn(
+            t,
+            carray(y, ny),
+            carray(r, nr),
+            carray(p, n_p),
+            carray(s, ns),
+            carray(tau, nt),
+        )
+
+    return nb.cfunc(CONTROL_SIGNATURE, cache=cache)(wrapper)
+
+
+# ------------------------------------------------------------------ built-ins
+@nb.njit(cache=True, nogil=True)
+def _joint_pd(t, y, r, p, s, tau):  # type: ignore[no-untyped-def]  # pragma: no cover
+    n = tau.shape[0]
+    for i in range(n):
+        tau[i] = p[i] * (r[6 + i] - y[i]) + p[n + i] * (r[6 + n + i] - y[n + i])
+
+
+@nb.njit(cache=True, nogil=True)
+def _jacobian_transpose_pd(t, y, r, p, s, tau):  # type: ignore[no-untyped-def]  # pragma: no cover
+    n = tau.shape[0]
+    px, py = y[2 * n], y[2 * n + 1]
+    vx, vy = y[2 * n + 2], y[2 * n + 3]
+    ex, ey = r[0] - px, r[1] - py
+    evx, evy = r[2] - vx, r[3] - vy
+    fx = p[0] * ex + p[1] * ey + p[4] * evx + p[5] * evy
+    fy = p[2] * ex + p[3] * ey + p[6] * evx + p[7] * evy
+    # rigid Jacobian: column k = sum_{i >= k} L_i (-sin phi_i, cos phi_i)
+    phi = 0.0
+    for i in range(n):
+        tau[i] = 0.0
+    for i in range(n):
+        phi += y[i]
+        jx = -p[8 + i] * math.sin(phi)
+        jy = p[8 + i] * math.cos(phi)
+        contrib = jx * fx + jy * fy
+        for k in range(i + 1):
+            tau[k] += contrib
+
+
+@nb.cfunc(CONTROL_SIGNATURE, cache=True)
+def joint_pd_cfunc(t, y, ny, r, nr, p, n_p, s, ns, tau, nt):  # type: ignore[no-untyped-def]
+    _joint_pd(  # pragma: no cover - compiled
+        t,
+        carray(y, ny),
+        carray(r, nr),
+        carray(p, n_p),
+        carray(s, ns),
+        carray(tau, nt),
+    )
+
+
+@nb.cfunc(CONTROL_SIGNATURE, cache=True)
+def jacobian_transpose_pd_cfunc(t, y, ny, r, nr, p, n_p, s, ns, tau, nt):  # type: ignore[no-untyped-def]
+    _jacobian_transpose_pd(  # pragma: no cover - compiled
+        t,
+        carray(y, ny),
+        carray(r, nr),
+        carray(p, n_p),
+        carray(s, ns),
+        carray(tau, nt),
+    )
+
+
+# ------------------------------------------------------------------ classes
+class Controller:
+    """Interface: what the simulator needs from a controller.
+
+    Subclasses provide :attr:`cfunc` (a ``numba.cfunc`` with
+    :data:`CONTROL_SIGNATURE`), :meth:`parameters` (the ``params`` vector for a
+    given arm) and :meth:`initial_state` (the initial ``state`` vector).
+    """
+
+    name = "controller"
+
+    @property
+    def cfunc(self) -> Any:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def parameters(self, arm: Any) -> NDArray[np.float64]:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def initial_state(self, arm: Any) -> NDArray[np.float64]:
+        return np.zeros(0)
+
+    def __call__(
+        self,
+        t: float,
+        y: NDArray[np.float64],
+        r: NDArray[np.float64],
+        params: NDArray[np.float64],
+        state: NDArray[np.float64],
+    ) -> NDArray[np.float64]:
+        """Evaluate the compiled law once from Python (``state`` is updated in place)."""
+        n_links = (r.shape[0] - 6) // 2
+        tau = np.zeros(n_links)
+        y = np.ascontiguousarray(y, dtype=float)
+        r = np.ascontiguousarray(r, dtype=float)
+        params = np.ascontiguousarray(params, dtype=float)
+        fn = self.cfunc.ctypes
+        fn(
+            float(t),
+            _ptr(y),
+            y.size,
+            _ptr(r),
+            r.size,
+            _ptr(params),
+            params.size,
+            _ptr(state),
+            state.size,
+            _ptr(tau),
+            tau.size,
+        )
+        return tau
+
+
+def _ptr(a: NDArray[np.float64]) -> Any:
+    import ctypes
+
+    return a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+
+
+def _gain_vector(value: ArrayLike, name: str, owner: str, n: int) -> NDArray[np.float64]:
+    g = check_array(value, name, owner)
+    if g.ndim == 0:
+        g = np.full(n, float(g))
+    if g.shape != (n,):
+        raise ValueError(
+            f"The '{name}' parameter of {owner} must be a scalar or of shape ({n},). "
+            f"Got shape {g.shape} instead."
+        )
+    if np.any(g < 0):
+        raise ValueError(f"The '{name}' parameter of {owner} must be >= 0. Got {g} instead.")
+    return g
+
+
+def _gain_matrix(value: ArrayLike, name: str, owner: str) -> NDArray[np.float64]:
+    g = check_array(value, name, owner)
+    if g.ndim == 0:
+        g = float(g) * np.eye(2)
+    elif g.shape == (2,):
+        g = np.diag(g)
+    if g.shape != (2, 2):
+        raise ValueError(
+            f"The '{name}' parameter of {owner} must be a scalar, of shape (2,) or (2, 2). "
+            f"Got shape {g.shape} instead."
+        )
+    return g
+
+
+@dataclass(frozen=True)
+class JointPD(Controller):
+    """Joint-space PD: ``tau = Kp (theta_r - theta) + Kd (dtheta_r - dtheta)``.
+
+    Parameters
+    ----------
+    kp : float or array_like, shape (n_links,)
+        Proportional gains, N m/rad (>= 0).
+    kd : float or array_like, shape (n_links,)
+        Derivative gains, N m s/rad (>= 0).
+    """
+
+    kp: Any = 100.0
+    kd: Any = 10.0
+    name = "joint-pd"
+
+    @property
+    def cfunc(self) -> Any:
+        return joint_pd_cfunc
+
+    def parameters(self, arm: Any) -> NDArray[np.float64]:
+        n = arm.n_links
+        kp = _gain_vector(self.kp, "kp", "JointPD", n)
+        kd = _gain_vector(self.kd, "kd", "JointPD", n)
+        return np.concatenate([kp, kd])
+
+
+@dataclass(frozen=True)
+class JacobianTransposePD(Controller):
+    """Operational-space PD through the transposed rigid Jacobian (paper eq. 11).
+
+    ``tau = J(theta)' [Kp (x_r - x) + Kd (v_r - v)]``.
+
+    Parameters
+    ----------
+    kp : float or array_like, shape (2,) or (2, 2)
+        Stiffness, N/m (a scalar is ``kp I``).
+    kd : float or array_like, shape (2,) or (2, 2)
+        Damping, N s/m.
+    """
+
+    kp: Any = 150.79
+    kd: Any = 17.364
+    name = "jt-pd"
+
+    @classmethod
+    def from_arm(cls, arm: Any, zeta: float = 0.707) -> JacobianTransposePD:
+        """The paper's gains from the first link's first clamped frequency ``omega_1``:
+        ``Kp = omega_1**2 I``, ``Kd = 2 zeta omega_1 I``."""
+        zeta = check_real(zeta, "zeta", "JacobianTransposePD.from_arm", nonnegative=True)
+        freqs = arm.link_frequencies[0]
+        if len(freqs) == 0:
+            raise ValueError(
+                "JacobianTransposePD.from_arm needs a first link with at least one mode."
+            )
+        w1 = float(freqs[0])
+        return cls(kp=w1**2, kd=2.0 * zeta * w1)
+
+    @property
+    def cfunc(self) -> Any:
+        return jacobian_transpose_pd_cfunc
+
+    def parameters(self, arm: Any) -> NDArray[np.float64]:
+        kp = _gain_matrix(self.kp, "kp", "JacobianTransposePD")
+        kd = _gain_matrix(self.kd, "kd", "JacobianTransposePD")
+        lengths = np.array([lk.length for lk in arm.links])
+        return np.concatenate([kp.ravel(), kd.ravel(), lengths])
+
+
+@dataclass(frozen=True)
+class CompiledController(Controller):
+    """A user-written law ``function(t, y, r, params, state, tau)``.
+
+    Parameters
+    ----------
+    function : numba dispatcher
+        An ``@numba.njit`` function of (float, 1-D arrays...) writing ``tau``.
+    params : array_like, shape (p,)
+        Passed to every call.
+    state : array_like, shape (s,)
+        Initial state; the function may update it in place.
+    name : str
+        Label for results.
+
+    Examples
+    --------
+    >>> import numba
+    >>> @numba.njit
+    ... def hold(t, y, r, params, state, tau):
+    ...     for i in range(tau.shape[0]):
+    ...         tau[i] = -params[0] * y[tau.shape[0] + i]   # damp the joints
+    >>> ctrl = CompiledController(hold, params=[5.0])
+    """
+
+    function: Any
+    params: Any = ()
+    state: Any = ()
+    name: str = "compiled"
+    _cfunc: list[Any] = field(default_factory=list, init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if not hasattr(self.function, "py_func"):
+            raise TypeError(
+                "The 'function' parameter of CompiledController must be a numba.njit "
+                f"function. Got {type(self.function).__name__} instead."
+            )
+        object.__setattr__(
+            self, "params", check_array(self.params, "params", "CompiledController").ravel()
+        )
+        object.__setattr__(
+            self, "state", check_array(self.state, "state", "CompiledController").ravel()
+        )
+
+    @property
+    def cfunc(self) -> Any:
+        if not self._cfunc:
+            self._cfunc.append(wrap_control_function(self.function))
+        return self._cfunc[0]
+
+    def parameters(self, arm: Any) -> NDArray[np.float64]:
+        return np.asarray(self.params, dtype=float)
+
+    def initial_state(self, arm: Any) -> NDArray[np.float64]:
+        return np.array(self.state, dtype=float)

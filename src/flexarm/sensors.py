@@ -1,0 +1,180 @@
+"""Sensors: collocated (joint encoders) and noncollocated (a point on a link).
+
+A sensor decides what the controller sees as the position and velocity of the
+end effector (layout in :mod:`flexarm.signals`):
+
+* :class:`JointSensor` — collocated: the joint angles and rates (the motor
+  angles for flexible joints); position and velocity follow from the rigid
+  kinematics of those angles. Noise and quantisation act on the angles.
+* :class:`PointSensor` — noncollocated: the Cartesian position and velocity of
+  the point ``distance`` metres along link ``link`` (0-based), deflection
+  included (:meth:`flexarm.FlexibleArm.point_position`). ``PointSensor(1, 0.5)``
+  is the paper's sensor 0.5 m from the elbow. Noise and quantisation act on the
+  Cartesian signals.
+* :class:`TipSensor` — the end effector (the last link's tip).
+
+Noise is Gaussian, drawn from the simulation's ``rng`` (seeded runs are
+reproducible); quantisation rounds to a multiple of the resolution. A transport
+delay (:mod:`flexarm.delays`) acts on the sensed signal before noise and
+quantisation. With a noncollocated sensor the encoder angles that feed the
+Jacobian are taken as exact and undelayed.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._validation import check_int, check_real, validate_real_fields
+
+__all__ = ["JointSensor", "PointSensor", "Sensor", "TipSensor", "parse_sensor"]
+
+_NOISE_FIELDS = ("noise_std", "rate_noise_std", "quantization", "rate_quantization")
+
+
+@dataclass(frozen=True)
+class JointSensor:
+    """Joint encoders (collocated).
+
+    Parameters
+    ----------
+    noise_std : float
+        Standard deviation of the angle noise, rad.
+    rate_noise_std : float
+        Standard deviation of the rate noise, rad/s.
+    quantization : float
+        Encoder resolution, rad (0: none).
+    rate_quantization : float
+        Rate resolution, rad/s (0: none).
+    """
+
+    noise_std: float = 0.0
+    rate_noise_std: float = 0.0
+    quantization: float = 0.0
+    rate_quantization: float = 0.0
+    name = "joint"
+
+    def __post_init__(self) -> None:
+        validate_real_fields(self, "JointSensor", nonnegative=_NOISE_FIELDS)
+
+    def resolve(self, arm: Any) -> tuple[int, float, NDArray[np.float64]]:
+        """``(link, distance, mode shapes at the point)``; link -1 means collocated."""
+        return -1, 0.0, np.zeros(0)
+
+    def describe(self, arm: Any) -> str:
+        return "joint"
+
+
+@dataclass(frozen=True)
+class PointSensor:
+    """A point ``distance`` m along link ``link`` (0-based), deflection included.
+
+    Parameters
+    ----------
+    link : int
+        0-based link index.
+    distance : float
+        Distance from the link's joint along the undeformed link, m.
+    noise_std, rate_noise_std : float
+        Noise standard deviations of the position (m) and velocity (m/s).
+    quantization, rate_quantization : float
+        Resolutions of the position (m) and velocity (m/s); 0 for none.
+    """
+
+    link: int
+    distance: float
+    noise_std: float = 0.0
+    rate_noise_std: float = 0.0
+    quantization: float = 0.0
+    rate_quantization: float = 0.0
+    name = "point"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "link", check_int(self.link, "link", "PointSensor", minimum=0))
+        validate_real_fields(self, "PointSensor", nonnegative=("distance", *_NOISE_FIELDS))
+
+    def resolve(self, arm: Any) -> tuple[int, float, NDArray[np.float64]]:
+        if self.link >= arm.n_links:
+            raise ValueError(
+                f"The 'link' parameter of PointSensor must be < {arm.n_links} (0-based). "
+                f"Got {self.link} instead."
+            )
+        length = arm.links[self.link].length
+        if self.distance > length:
+            raise ValueError(
+                f"The 'distance' parameter of PointSensor must be <= {length} m (link "
+                f"{self.link}'s length). Got {self.distance} instead."
+            )
+        phi = np.ascontiguousarray(arm.modes[self.link].shape(self.distance)[:, 0])
+        return self.link, self.distance, phi
+
+    def describe(self, arm: Any) -> str:
+        return f"point:{self.link}:{self.distance:g}"
+
+
+@dataclass(frozen=True)
+class TipSensor:
+    """The end effector: the last link's tip, deflection included (same noise
+    parameters as :class:`PointSensor`)."""
+
+    noise_std: float = 0.0
+    rate_noise_std: float = 0.0
+    quantization: float = 0.0
+    rate_quantization: float = 0.0
+    name = "tip"
+
+    def __post_init__(self) -> None:
+        validate_real_fields(self, "TipSensor", nonnegative=_NOISE_FIELDS)
+
+    def at(self, arm: Any) -> PointSensor:
+        last = arm.n_links - 1
+        return PointSensor(
+            last,
+            arm.links[last].length,
+            self.noise_std,
+            self.rate_noise_std,
+            self.quantization,
+            self.rate_quantization,
+        )
+
+    def resolve(self, arm: Any) -> tuple[int, float, NDArray[np.float64]]:
+        return self.at(arm).resolve(arm)
+
+    def describe(self, arm: Any) -> str:
+        return "tip"
+
+
+Sensor = JointSensor | PointSensor | TipSensor
+
+_POINT = re.compile(r"^point:(?P<link>[^:]+):(?P<distance>[^:]+)$")
+
+
+def parse_sensor(spec: str, **noise: float) -> Sensor:
+    """A sensor from its command-line form: ``joint``, ``tip`` or ``point:LINK:DISTANCE``
+    (link 0-based, distance in m: ``point:1:0.5`` is 0.5 m from the elbow)."""
+    if not isinstance(spec, str):
+        raise TypeError(f"The 'sensor' parameter must be a str. Got {type(spec).__name__} instead.")
+    if spec == "joint":
+        return JointSensor(**noise)
+    if spec == "tip":
+        return TipSensor(**noise)
+    m = _POINT.match(spec)
+    if m is None:
+        raise ValueError(
+            "The 'sensor' parameter must be 'joint', 'tip' or 'point:LINK:DISTANCE'. "
+            f"Got {spec!r} instead."
+        )
+    try:
+        link = int(m["link"])
+        distance = float(m["distance"])
+    except ValueError:
+        raise ValueError(
+            f"The 'sensor' parameter 'point:LINK:DISTANCE' needs an integer link and a "
+            f"distance in m. Got {spec!r} instead."
+        ) from None
+    check_real(distance, "distance", "PointSensor", nonnegative=True)
+    return PointSensor(link, distance, **noise)

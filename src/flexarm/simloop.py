@@ -1,0 +1,299 @@
+"""The compiled closed loop: sampled-data control, zero-order hold, RK4 substeps.
+
+One Numba function runs a whole simulation (or a chunk of one) without
+returning to Python: at every control instant ``t_k = k dt`` it forms the
+measurement (sensor, delay, noise, quantisation), calls the controller through
+its C function pointer, saturates and holds the torque, then integrates the
+plant over ``[t_k, t_k + dt]`` with ``substeps`` fixed RK4 steps. Delays act at
+substep resolution: the exact delay is a ring buffer of the sensed signal
+(delay rounded to whole substeps), the Padé delay a discrete state-space
+filter discretised exactly over one substep (zero-order hold on its input).
+
+Everything is plain arrays; :func:`flexarm.simulate.simulate` prepares them.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numba as nb
+import numpy as np
+from numpy.typing import NDArray
+
+from .kernels import LEN, ArmArrays, Workspace, forward_dynamics, point_kinematics
+
+__all__ = ["LoopState", "SensorArrays", "run"]
+
+F64 = NDArray[np.float64]
+
+OK, DIVERGED = 0, 1
+
+
+class SensorArrays(NamedTuple):
+    """The sensor as plain arrays.
+
+    link: int64 (1,) — link of the sensed point, -1 for the joint encoders.
+    distance: (1,) — distance of the point along its link, m.
+    phi: (n_modes of link,) — mode shapes at the point.
+    delay_steps: int64 (1,) — exact delay in substeps (0: none unless Padé).
+    pade_ad, pade_bd, pade_cd, pade_dd: discrete Padé filter (order p): (p, p), (p,),
+        (p,), (1,); p = 0 for no Padé.
+    noise: (n_steps + 1, n_channels) additive noise per control instant, or (0, n_channels).
+    resolution: (n_channels,) quantisation steps (0: none).
+    """
+
+    link: NDArray[np.int64]
+    distance: F64
+    phi: F64
+    delay_steps: NDArray[np.int64]
+    pade_ad: F64
+    pade_bd: F64
+    pade_cd: F64
+    pade_dd: F64
+    noise: F64
+    resolution: F64
+
+
+class LoopState(NamedTuple):
+    """Everything that carries over between chunks (updated in place)."""
+
+    q: F64  # (n,)
+    dq: F64  # (n,)
+    tau: F64  # (N,) held torque
+    ctrl_state: F64  # (s,)
+    buffer: F64  # (delay_steps + 1, n_channels) ring of sensed signals
+    cursor: NDArray[np.int64]  # (1,) substeps integrated so far
+    pade_x: F64  # (n_channels, p) filter states
+    scratch: F64  # (9, n) RK4 stages and temporaries (row 1 unused)
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _collocated(q: F64, dq: F64, model: ArmArrays, i: int, n_links: int) -> tuple[float, float]:
+    """Encoder angle and rate of joint ``i``: the motor with flexible joints."""
+    if model.joint.shape[0] > 0:
+        m = model.mode_start[n_links] + i
+        return q[m], dq[m]
+    return q[i], dq[i]
+
+
+@nb.njit(cache=True, nogil=True)
+def _sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> None:
+    """The raw (true, undelayed) sensed signal."""
+    n_links = model.link.shape[0]
+    link = sensor.link[0]
+    if link < 0:
+        for i in range(n_links):
+            a, r = _collocated(q, dq, model, i, n_links)
+            out[i] = a
+            out[n_links + i] = r
+    else:
+        point_kinematics(q, dq, model, link, sensor.distance[0], sensor.phi, out)
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _diverged(q: F64, dq: F64, model: ArmArrays, max_deflection: F64) -> bool:
+    for r in range(q.shape[0]):
+        if not (np.isfinite(q[r]) and np.isfinite(dq[r])):
+            return True
+        if abs(dq[r]) > 1e12:
+            return True
+    ms = model.mode_start
+    for i in range(model.link.shape[0]):
+        e = 0.0
+        for r in range(ms[i], ms[i + 1]):
+            e += model.tip_deflection[r] * q[r]
+        if abs(e) > max_deflection[i]:
+            return True
+    return False
+
+
+@nb.njit(cache=True, nogil=True)
+def _rk4(
+    q: F64, dq: F64, tau: F64, h: float, model: ArmArrays, ws: Workspace, s: F64
+) -> None:  # pragma: no cover - compiled
+    """One classical RK4 step of ``qdd = f(q, dq, tau)`` in place; ``s`` is (9, n) scratch."""
+    n = q.shape[0]
+    qt = s[0]
+    a1, a2, a3, a4 = s[2], s[3], s[4], s[5]
+    v2, v3, v4 = s[6], s[7], s[8]
+    forward_dynamics(q, dq, tau, model, ws, a1)
+    for r in range(n):
+        qt[r] = q[r] + 0.5 * h * dq[r]
+        v2[r] = dq[r] + 0.5 * h * a1[r]
+    forward_dynamics(qt, v2, tau, model, ws, a2)
+    for r in range(n):
+        qt[r] = q[r] + 0.5 * h * v2[r]
+        v3[r] = dq[r] + 0.5 * h * a2[r]
+    forward_dynamics(qt, v3, tau, model, ws, a3)
+    for r in range(n):
+        qt[r] = q[r] + h * v3[r]
+        v4[r] = dq[r] + h * a3[r]
+    forward_dynamics(qt, v4, tau, model, ws, a4)
+    c = h / 6.0
+    for r in range(n):
+        q[r] += c * (dq[r] + 2.0 * v2[r] + 2.0 * v3[r] + v4[r])
+        dq[r] += c * (a1[r] + 2.0 * a2[r] + 2.0 * a3[r] + a4[r])
+
+
+@nb.njit(cache=True, nogil=True)
+def run(
+    model: ArmArrays,
+    control: Any,  # FunctionType: see flexarm.controllers.CONTROL_SIGNATURE
+    params: F64,
+    sensor: SensorArrays,
+    reference: F64,
+    dt: float,
+    substeps: int,
+    torque_limit: F64,
+    max_deflection: F64,
+    state: LoopState,
+    k0: int,
+    k1: int,
+    out_q: F64,
+    out_dq: F64,
+    out_tau: F64,
+    out_y: F64,
+    out_tip: F64,
+) -> tuple[int, int]:  # pragma: no cover - compiled
+    """Advance the loop over control instants ``k0 <= k < k1`` (record at each ``k``,
+    then act and integrate to ``k + 1`` unless ``k`` is the last row of ``reference``).
+
+    Returns ``(status, k)``: status 0 and ``k1`` when done, 1 and the last recorded
+    instant when the state diverged (non-finite, rates above 1e12, or a link's tip
+    deflection above ``max_deflection``).
+    """
+    n = state.q.shape[0]
+    n_links = model.link.shape[0]
+    ms = model.mode_start
+    n_modes = ms[n_links] - n_links
+    n_steps = reference.shape[0] - 1
+    h = dt / substeps
+    ws = Workspace(np.zeros((n, n)), np.zeros(n), np.zeros((2, n)), np.zeros(n), np.zeros(n))
+    q, dq, tau = state.q, state.dq, state.tau
+    n_ch = state.buffer.shape[1]
+    raw = np.zeros(n_ch)
+    delayed = np.zeros(n_ch)
+    y = np.zeros(out_y.shape[1])
+    tip = np.zeros(4)
+    last = n_links - 1
+    tip_phi = model.tip_deflection[ms[last] : ms[last + 1]].copy()
+    n_buf = state.buffer.shape[0]
+    order = sensor.pade_ad.shape[0]
+    x_new = np.zeros(max(order, 1))
+    has_noise = sensor.noise.shape[0] > 0
+    joint_sensor = sensor.link[0] < 0
+    for k in range(k0, k1):
+        # ---- measure: the delayed sensed signal, then noise and quantisation
+        _sense(q, dq, model, sensor, raw)
+        cur = state.cursor[0]
+        if n_buf > 1:
+            src = cur - (n_buf - 1)
+            if src < 0:
+                src = 0
+            for c in range(n_ch):
+                delayed[c] = state.buffer[src % n_buf, c]
+        elif order > 0:
+            for c in range(n_ch):
+                acc = sensor.pade_dd[0] * raw[c]
+                for j in range(order):
+                    acc += sensor.pade_cd[j] * state.pade_x[c, j]
+                delayed[c] = acc
+        else:
+            for c in range(n_ch):
+                delayed[c] = raw[c]
+        for c in range(n_ch):
+            v = delayed[c]
+            if has_noise:
+                v += sensor.noise[k, c]
+            res = sensor.resolution[c]
+            if res > 0.0:
+                v = np.round(v / res) * res
+            delayed[c] = v
+        if joint_sensor:
+            # rigid kinematics of the measured angles
+            px = 0.0
+            py = 0.0
+            vx = 0.0
+            vy = 0.0
+            phi = 0.0
+            phid = 0.0
+            for i in range(n_links):
+                y[i] = delayed[i]
+                y[n_links + i] = delayed[n_links + i]
+                phi += delayed[i]
+                phid += delayed[n_links + i]
+                L = model.link[i, LEN]
+                px += L * np.cos(phi)
+                py += L * np.sin(phi)
+                vx -= L * np.sin(phi) * phid
+                vy += L * np.cos(phi) * phid
+            y[2 * n_links] = px
+            y[2 * n_links + 1] = py
+            y[2 * n_links + 2] = vx
+            y[2 * n_links + 3] = vy
+        else:
+            for i in range(n_links):
+                a, r = _collocated(q, dq, model, i, n_links)
+                y[i] = a
+                y[n_links + i] = r
+            for c in range(4):
+                y[2 * n_links + c] = delayed[c]
+        for j in range(n_modes):
+            y[2 * n_links + 4 + j] = q[n_links + j]
+        # ---- record
+        point_kinematics(q, dq, model, last, model.link[last, LEN], tip_phi, tip)
+        for r in range(n):
+            out_q[k, r] = q[r]
+            out_dq[k, r] = dq[r]
+        for c in range(y.shape[0]):
+            out_y[k, c] = y[c]
+        out_tip[k, 0] = tip[0]
+        out_tip[k, 1] = tip[1]
+        if k == n_steps:
+            for i in range(n_links):
+                out_tau[k, i] = tau[i]
+            return OK, k1
+        # ---- act: control law, saturation, zero-order hold
+        rk = reference[k]
+        control(
+            k * dt,
+            y.ctypes,
+            y.shape[0],
+            rk.ctypes,
+            rk.shape[0],
+            params.ctypes,
+            params.shape[0],
+            state.ctrl_state.ctypes,
+            state.ctrl_state.shape[0],
+            tau.ctypes,
+            n_links,
+        )
+        for i in range(n_links):
+            lim = torque_limit[i]
+            if tau[i] > lim:
+                tau[i] = lim
+            elif tau[i] < -lim:
+                tau[i] = -lim
+            out_tau[k, i] = tau[i]
+        # ---- integrate to t_{k+1}
+        for _ in range(substeps):
+            if order > 0:  # Padé filter: x <- Ad x + Bd u over this substep
+                _sense(q, dq, model, sensor, raw)
+                for c in range(n_ch):
+                    for j in range(order):
+                        acc = sensor.pade_bd[j] * raw[c]
+                        for i2 in range(order):
+                            acc += sensor.pade_ad[j, i2] * state.pade_x[c, i2]
+                        x_new[j] = acc
+                    for j in range(order):
+                        state.pade_x[c, j] = x_new[j]
+            _rk4(q, dq, tau, h, model, ws, state.scratch)
+            state.cursor[0] += 1
+            if n_buf > 1:
+                _sense(q, dq, model, sensor, raw)
+                slot = state.cursor[0] % n_buf
+                for c in range(n_ch):
+                    state.buffer[slot, c] = raw[c]
+            if _diverged(q, dq, model, max_deflection):
+                return DIVERGED, k
+    return OK, k1

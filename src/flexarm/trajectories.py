@@ -1,0 +1,672 @@
+"""Planar end-effector reference paths and their joint-space references.
+
+Every trajectory is a frozen, validated dataclass that maps time ``t`` (s) to
+the position (m), velocity (m/s) and acceleration (m/s**2) of the end
+effector in the base frame, through one interface (:class:`Trajectory`):
+
+``duration``
+    Total time in s, dwells included. For ``t > duration`` the trajectory holds
+    its final point with zero velocity and acceleration; for ``t`` before its
+    start (``t < 0``, or ``t < times[0]`` for :class:`Waypoints`) it holds its
+    first point, likewise at rest.
+``evaluate(t)``
+    ``(position, velocity, acceleration)``, each of shape ``(m, 2)`` for ``t``
+    of shape ``(m,)`` or ``(2,)`` for a scalar ``t``. Vectorised over ``t``.
+    Where the velocity jumps (``timing="constant"`` at a corner, the start and
+    the end), the value returned is the right-hand limit: the velocity of the
+    segment that starts at ``t``, zero at ``t = duration``; the acceleration
+    is reported as 0 there.
+``corner_times``
+    The times in s of the path's corners or segment boundaries, which metrics
+    use for "the error after each corner".
+
+The square is the paper's experiment (Sasiadek et al., 2014, Sec. V) but its
+size, placement and speed are not given; :class:`Square`'s defaults are
+flexarm's choice, documented there. :func:`joint_reference` turns a path into
+joint angles, rates and accelerations of a rigid two-link arm and
+:func:`sample` into the six-column table the simulator reads.
+
+This module sits below the arm in the layering: it imports only
+:mod:`flexarm._validation` and takes the arm by duck typing.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ._validation import check_array, check_int, check_option, check_real, validate_real_fields
+
+__all__ = [
+    "Circle",
+    "Line",
+    "PointToPoint",
+    "Square",
+    "Trajectory",
+    "Waypoints",
+    "joint_reference",
+    "sample",
+]
+
+DIRECTIONS = ("ccw", "cw")
+TIMINGS = ("constant", "quintic")
+INTERPOLATIONS = ("linear", "quintic")
+ELBOWS = ("positive", "negative")
+
+_F = NDArray[np.float64]
+_Triple = tuple[_F, _F, _F]
+
+
+@runtime_checkable
+class Trajectory(Protocol):
+    """What the simulator, the metrics and :func:`joint_reference` need of a path."""
+
+    @property
+    def duration(self) -> float:
+        """Total time, s."""
+
+    @property
+    def corner_times(self) -> tuple[float, ...]:
+        """Times of the corners or segment boundaries, s."""
+
+    def evaluate(self, t: ArrayLike) -> _Triple:
+        """Position (m), velocity (m/s) and acceleration (m/s**2) at ``t`` (s)."""
+
+
+class _KinematicArm(Protocol):
+    """The part of :class:`flexarm.FlexibleArm` that :func:`joint_reference` uses."""
+
+    @property
+    def n_links(self) -> int: ...
+
+    @property
+    def links(self) -> Sequence[Any]: ...
+
+    def inverse_kinematics(self, position: ArrayLike, elbow: str = ...) -> _F: ...
+
+    def jacobian(self, theta: ArrayLike) -> _F: ...
+
+
+# ------------------------------------------------------------------ helpers
+def _point(value: Any, name: str, owner: str) -> tuple[float, float]:
+    arr = check_array(value, name, owner, shape=(2,))
+    if arr.dtype.kind == "c":
+        raise TypeError(
+            f"The '{name}' parameter of {owner} must be real. Got a complex array instead."
+        )
+    return (float(arr[0]), float(arr[1]))
+
+
+def _times(t: ArrayLike, owner: str) -> tuple[_F, bool]:
+    """``t`` as a float array of shape ``(m,)`` and whether it was a scalar."""
+    arr = check_array(t, "t", owner)
+    if arr.dtype.kind == "c":
+        raise TypeError(f"The 't' parameter of {owner} must be real. Got a complex array instead.")
+    if arr.ndim > 1:
+        raise ValueError(
+            f"The 't' parameter of {owner} must be a scalar or of shape (m,). "
+            f"Got shape {arr.shape} instead."
+        )
+    return np.atleast_1d(arr).astype(np.float64), arr.ndim == 0
+
+
+def _shape_out(triple: _Triple, scalar: bool) -> _Triple:
+    if scalar:
+        return triple[0][0], triple[1][0], triple[2][0]
+    return triple
+
+
+def _piecewise(t: _F, knot_t: _F, knot_p: _F, quintic: bool) -> _Triple:
+    """Straight segments between consecutive knots, each with its own time scaling.
+
+    ``knot_t`` (k,) strictly increasing, s; ``knot_p`` (k, 2), m. A repeated
+    point is a dwell. Outside ``[knot_t[0], knot_t[-1])`` the path is at rest.
+    """
+    k = knot_t.shape[0]
+    i = np.clip(np.searchsorted(knot_t, t, side="right") - 1, 0, k - 2)
+    t0 = knot_t[i]
+    span = knot_t[i + 1] - t0
+    tau = np.clip((t - t0) / span, 0.0, 1.0)
+    moving = ((t >= knot_t[0]) & (t < knot_t[-1]))[:, None]
+    delta = knot_p[i + 1] - knot_p[i]
+    if quintic:
+        s = tau**3 * (10.0 + tau * (-15.0 + 6.0 * tau))
+        ds = 30.0 * tau**2 * (1.0 - tau) ** 2
+        dds = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau)
+    else:
+        s = tau
+        ds = np.ones_like(tau)
+        dds = np.zeros_like(tau)
+    pos = knot_p[i] + s[:, None] * delta
+    vel = np.where(moving, (ds / span)[:, None] * delta, 0.0)
+    acc = np.where(moving, (dds / span**2)[:, None] * delta, 0.0)
+    return pos, vel, acc
+
+
+# ------------------------------------------------------------------ paths
+@dataclass(frozen=True)
+class Square:
+    """A square traced side by side, the paper's tracking experiment.
+
+    Corners are numbered 0..3 counter-clockwise from the lower-left one,
+    ``(x_c - side/2, y_c - side/2)``. The path starts at ``start_corner``,
+    runs one side in ``time_per_side``, rests ``dwell`` at the corner it
+    reaches, and so on: side, dwell, side, dwell, ... for ``4 * laps`` sides,
+    ending (after a last dwell) back at the start corner.
+
+    Parameters
+    ----------
+    center : array_like, shape (2,)
+        ``(x_c, y_c)`` in m.
+    side : float
+        Side length in m (> 0).
+    time_per_side : float
+        Travel time along one side in s (> 0), dwell excluded.
+    dwell : float
+        Rest at every corner after arriving, s (>= 0).
+    start_corner : int
+        Corner where motion starts, 0..3.
+    direction : {"ccw", "cw"}
+        Sense of travel.
+    laps : int
+        Number of times round (>= 1).
+    timing : {"constant", "quintic"}
+        ``"constant"``: constant speed ``side / time_per_side`` along each side,
+        so the velocity jumps at the corners (this is what excites the flexible
+        modes) and the acceleration is 0 within the sides and reported as 0 at
+        the jumps. ``"quintic"``: rest-to-rest time scaling
+        ``s(tau) = 10 tau**3 - 15 tau**4 + 6 tau**5`` on each side (smooth).
+
+    Notes
+    -----
+    The paper gives no size, placement or speed for its square. The defaults
+    are flexarm's choice: centre (5, 0) m, side 4 m, 5 s per side (0.8 m/s),
+    counter-clockwise from the lower-left corner, constant speed, no dwell,
+    20 s in all. The square then lies inside the workspace of the paper's arm
+    (two 4.5 m links, reach 0 to 9 m) with its corners 3.6 m and 7.3 m from
+    the base, away from the singular full reach, and the velocity jumps at
+    its corners excite the flexible modes. (A related paper by the same group
+    used a 12.6 m square whose corners sit near the 9 m reach.)
+
+    ``corner_times`` holds the ``4 * laps`` arrival times at a corner,
+    ``k * time_per_side + (k - 1) * dwell`` for ``k = 1 .. 4 * laps``. The last
+    one is the closing corner; the departures after a dwell are at
+    ``corner_times[k] + dwell``.
+
+    Examples
+    --------
+    >>> sq = Square()
+    >>> sq.duration
+    20.0
+    >>> p, v, a = sq.evaluate(2.5)
+    >>> p.tolist(), v.tolist()
+    ([5.0, -2.0], [0.8, 0.0])
+    """
+
+    center: tuple[float, float] = (5.0, 0.0)
+    side: float = 4.0
+    time_per_side: float = 5.0
+    dwell: float = 0.0
+    start_corner: int = 0
+    direction: str = "ccw"
+    laps: int = 1
+    timing: str = "constant"
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        object.__setattr__(self, "center", _point(self.center, "center", owner))
+        validate_real_fields(
+            self, owner, positive=("side", "time_per_side"), nonnegative=("dwell",)
+        )
+        corner = check_int(self.start_corner, "start_corner", owner, minimum=0)
+        if corner > 3:
+            raise ValueError(
+                f"The 'start_corner' parameter of {owner} must be one of (0, 1, 2, 3). "
+                f"Got {corner!r} instead."
+            )
+        object.__setattr__(self, "start_corner", corner)
+        check_option(self.direction, "direction", owner, DIRECTIONS)
+        object.__setattr__(self, "laps", check_int(self.laps, "laps", owner, minimum=1))
+        check_option(self.timing, "timing", owner, TIMINGS)
+
+    @property
+    def corners(self) -> _F:
+        """The four corners, numbered counter-clockwise from the lower left, shape (4, 2), m."""
+        h = 0.5 * self.side
+        offsets = np.array([[-h, -h], [h, -h], [h, h], [-h, h]])
+        corners: _F = np.asarray(self.center) + offsets
+        return corners
+
+    @property
+    def duration(self) -> float:
+        """Total time ``4 * laps * (time_per_side + dwell)``, s."""
+        return 4 * self.laps * (self.time_per_side + self.dwell)
+
+    @property
+    def corner_times(self) -> tuple[float, ...]:
+        """Arrival times at the corners (see Notes), s."""
+        k = np.arange(1, 4 * self.laps + 1)
+        return tuple(float(x) for x in k * self.time_per_side + (k - 1) * self.dwell)
+
+    def _knots(self) -> tuple[_F, _F]:
+        n = 4 * self.laps
+        step = 1 if self.direction == "ccw" else -1
+        order = (self.start_corner + step * np.arange(n + 1)) % 4
+        points = self.corners[order]
+        k = np.arange(n + 1)
+        arrive = k * self.time_per_side + np.maximum(k - 1, 0) * self.dwell
+        if self.dwell == 0.0:
+            return arrive.astype(np.float64), points
+        leave = k * (self.time_per_side + self.dwell)
+        # knots: start, then for each side its arrival and the end of its dwell
+        times = np.concatenate([[0.0], np.column_stack([arrive[1:], leave[1:]]).ravel()])
+        pts = np.concatenate([points[:1], np.repeat(points[1:], 2, axis=0)])
+        return times, pts
+
+    def evaluate(self, t: ArrayLike) -> _Triple:
+        """Position, velocity and acceleration at ``t``.
+
+        Parameters
+        ----------
+        t : float or array_like, shape (m,)
+            Time, s.
+
+        Returns
+        -------
+        position, velocity, acceleration : ndarray, shape (m, 2) or (2,)
+            In m, m/s and m/s**2.
+        """
+        tt, scalar = _times(t, f"{type(self).__name__}.evaluate")
+        knot_t, knot_p = self._knots()
+        return _shape_out(_piecewise(tt, knot_t, knot_p, self.timing == "quintic"), scalar)
+
+
+@dataclass(frozen=True)
+class Circle:
+    """A circle traced at constant angular speed.
+
+    Parameters
+    ----------
+    center : array_like, shape (2,)
+        Centre in m.
+    radius : float
+        Radius in m (> 0).
+    period : float
+        Time for one lap in s (> 0).
+    laps : int
+        Number of laps (>= 1).
+    phase : float
+        Polar angle of the start point about the centre, rad.
+    direction : {"ccw", "cw"}
+        Sense of travel.
+
+    Notes
+    -----
+    Speed ``2 pi radius / period``; acceleration ``speed**2 / radius`` towards the
+    centre while moving. The velocity jumps from 0 at the start and back to 0
+    at the end. ``corner_times`` is empty.
+
+    Examples
+    --------
+    >>> c = Circle(radius=2.0, period=8.0)
+    >>> p, v, a = c.evaluate(2.0)
+    >>> p.round(12).tolist()
+    [5.0, 2.0]
+    """
+
+    center: tuple[float, float] = (5.0, 0.0)
+    radius: float = 2.0
+    period: float = 10.0
+    laps: int = 1
+    phase: float = 0.0
+    direction: str = "ccw"
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        object.__setattr__(self, "center", _point(self.center, "center", owner))
+        validate_real_fields(self, owner, positive=("radius", "period"))
+        object.__setattr__(self, "laps", check_int(self.laps, "laps", owner, minimum=1))
+        object.__setattr__(self, "phase", check_real(self.phase, "phase", owner))
+        check_option(self.direction, "direction", owner, DIRECTIONS)
+
+    @property
+    def duration(self) -> float:
+        """Total time ``laps * period``, s."""
+        return self.laps * self.period
+
+    @property
+    def corner_times(self) -> tuple[float, ...]:
+        """Empty: a circle has no corners."""
+        return ()
+
+    def evaluate(self, t: ArrayLike) -> _Triple:
+        """Position, velocity and acceleration at ``t``.
+
+        Parameters
+        ----------
+        t : float or array_like, shape (m,)
+            Time, s.
+
+        Returns
+        -------
+        position, velocity, acceleration : ndarray, shape (m, 2) or (2,)
+            In m, m/s and m/s**2.
+        """
+        tt, scalar = _times(t, f"{type(self).__name__}.evaluate")
+        omega = (2.0 * math.pi / self.period) * (1.0 if self.direction == "ccw" else -1.0)
+        moving = ((tt >= 0.0) & (tt < self.duration))[:, None]
+        angle = self.phase + omega * np.clip(tt, 0.0, self.duration)
+        radial = np.column_stack([np.cos(angle), np.sin(angle)])
+        tangent = np.column_stack([-np.sin(angle), np.cos(angle)])
+        pos = np.asarray(self.center) + self.radius * radial
+        vel = np.where(moving, self.radius * omega * tangent, 0.0)
+        acc = np.where(moving, -self.radius * omega**2 * radial, 0.0)
+        return _shape_out((pos, vel, acc), scalar)
+
+
+@dataclass(frozen=True)
+class Line:
+    """A straight line from ``start`` to ``end`` in ``duration``.
+
+    Parameters
+    ----------
+    start, end : array_like, shape (2,)
+        End points in m.
+    duration : float
+        Travel time in s (> 0).
+    timing : {"quintic", "constant"}
+        ``"quintic"``: rest-to-rest ``s(tau) = 10 tau**3 - 15 tau**4 + 6 tau**5``;
+        ``"constant"``: constant speed, velocity jumps at both ends.
+
+    Notes
+    -----
+    ``corner_times`` is empty. ``start == end`` is allowed (a rest of
+    ``duration``).
+
+    Examples
+    --------
+    >>> p, v, a = Line((0.0, 0.0), (2.0, 0.0), 4.0).evaluate([0.0, 2.0, 4.0])
+    >>> p[:, 0].tolist(), v[:, 0].tolist()
+    ([0.0, 1.0, 2.0], [0.0, 0.9375, 0.0])
+    """
+
+    start: tuple[float, float]
+    end: tuple[float, float]
+    duration: float
+    timing: str = "quintic"
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        object.__setattr__(self, "start", _point(self.start, "start", owner))
+        object.__setattr__(self, "end", _point(self.end, "end", owner))
+        validate_real_fields(self, owner, positive=("duration",))
+        check_option(self.timing, "timing", owner, TIMINGS)
+
+    @property
+    def corner_times(self) -> tuple[float, ...]:
+        """Empty: a line has no corners."""
+        return ()
+
+    def evaluate(self, t: ArrayLike) -> _Triple:
+        """Position, velocity and acceleration at ``t``.
+
+        Parameters
+        ----------
+        t : float or array_like, shape (m,)
+            Time, s.
+
+        Returns
+        -------
+        position, velocity, acceleration : ndarray, shape (m, 2) or (2,)
+            In m, m/s and m/s**2.
+        """
+        tt, scalar = _times(t, f"{type(self).__name__}.evaluate")
+        knot_t = np.array([0.0, self.duration])
+        knot_p = np.array([self.start, self.end])
+        return _shape_out(_piecewise(tt, knot_t, knot_p, self.timing == "quintic"), scalar)
+
+
+@dataclass(frozen=True)
+class PointToPoint(Line):
+    """A rest-to-rest move: :class:`Line` with ``timing="quintic"`` fixed.
+
+    Parameters
+    ----------
+    start, end : array_like, shape (2,)
+        End points in m.
+    duration : float
+        Travel time in s (> 0).
+
+    Examples
+    --------
+    >>> PointToPoint((0.0, 0.0), (1.0, 1.0), 2.0).timing
+    'quintic'
+    """
+
+    timing: str = field(default="quintic", init=False, repr=False)
+
+
+@dataclass(frozen=True)
+class Waypoints:
+    """A path through ``points`` reached at ``times``.
+
+    Parameters
+    ----------
+    points : array_like, shape (k, 2)
+        Waypoints in m, ``k >= 2``; a repeated point is a rest.
+    times : array_like, shape (k,)
+        Strictly increasing times in s at which the points are reached,
+        ``times[0] >= 0``. Before ``times[0]`` the path rests at ``points[0]``.
+    interpolation : {"linear", "quintic"}
+        ``"linear"``: straight segments at constant velocity (piecewise linear
+        position); ``"quintic"``: straight segments, each rest-to-rest quintic.
+
+    Notes
+    -----
+    ``duration`` is ``times[-1]`` (the end, measured from ``t = 0``);
+    ``corner_times`` holds the interior times ``times[1:-1]``.
+
+    Examples
+    --------
+    >>> w = Waypoints([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]], [1.0, 2.0, 4.0])
+    >>> w.duration, w.corner_times
+    (4.0, (2.0,))
+    >>> w.evaluate(3.0)[0].tolist()
+    [1.0, 0.5]
+    """
+
+    points: tuple[tuple[float, float], ...]
+    times: tuple[float, ...]
+    interpolation: str = "linear"
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        pts = check_array(self.points, "points", owner, shape=(-1, 2))
+        tms = check_array(self.times, "times", owner, shape=(-1,))
+        for name, arr in (("points", pts), ("times", tms)):
+            if arr.dtype.kind == "c":
+                raise TypeError(
+                    f"The '{name}' parameter of {owner} must be real. Got a complex array instead."
+                )
+        if pts.shape[0] < 2:
+            raise ValueError(
+                f"The 'points' parameter of {owner} must hold >= 2 points. "
+                f"Got {pts.shape[0]} instead."
+            )
+        if tms.shape[0] != pts.shape[0]:
+            raise ValueError(
+                f"The 'times' parameter of {owner} must be of shape ({pts.shape[0]},), "
+                f"one per point. Got shape {tms.shape} instead."
+            )
+        if tms[0] < 0.0:
+            raise ValueError(
+                f"The 'times' parameter of {owner} must start at >= 0. Got {tms[0]!r} instead."
+            )
+        if np.any(np.diff(tms) <= 0.0):
+            raise ValueError(
+                f"The 'times' parameter of {owner} must be strictly increasing. "
+                f"Got {tms.tolist()!r} instead."
+            )
+        check_option(self.interpolation, "interpolation", owner, INTERPOLATIONS)
+        object.__setattr__(self, "points", tuple((float(x), float(y)) for x, y in pts))
+        object.__setattr__(self, "times", tuple(float(x) for x in tms))
+
+    @property
+    def duration(self) -> float:
+        """End time ``times[-1]``, s."""
+        return self.times[-1]
+
+    @property
+    def corner_times(self) -> tuple[float, ...]:
+        """The interior waypoint times ``times[1:-1]``, s."""
+        return self.times[1:-1]
+
+    def evaluate(self, t: ArrayLike) -> _Triple:
+        """Position, velocity and acceleration at ``t``.
+
+        Parameters
+        ----------
+        t : float or array_like, shape (m,)
+            Time, s.
+
+        Returns
+        -------
+        position, velocity, acceleration : ndarray, shape (m, 2) or (2,)
+            In m, m/s and m/s**2.
+        """
+        tt, scalar = _times(t, f"{type(self).__name__}.evaluate")
+        knot_t = np.array(self.times)
+        knot_p = np.array(self.points)
+        return _shape_out(_piecewise(tt, knot_t, knot_p, self.interpolation == "quintic"), scalar)
+
+
+# ------------------------------------------------------------------ consumers
+def _check_trajectory(trajectory: Any, owner: str) -> None:
+    if not isinstance(trajectory, Trajectory):
+        raise TypeError(
+            f"The 'trajectory' parameter of {owner} must be a trajectory (with duration, "
+            f"corner_times and evaluate). Got {type(trajectory).__name__} instead."
+        )
+
+
+def sample(trajectory: Trajectory, t: ArrayLike) -> _F:
+    """The reference table: position, velocity and acceleration side by side.
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        Any path of this module.
+    t : float or array_like, shape (m,)
+        Times, s.
+
+    Returns
+    -------
+    ndarray, shape (m, 6)
+        Columns ``x, y`` (m), ``vx, vy`` (m/s), ``ax, ay`` (m/s**2); a scalar
+        ``t`` gives one row.
+
+    Examples
+    --------
+    >>> sample(Square(), [0.0, 5.0]).tolist()
+    [[3.0, -2.0, 0.8, 0.0, 0.0, 0.0], [7.0, -2.0, 0.0, 0.8, 0.0, 0.0]]
+    """
+    _check_trajectory(trajectory, "sample")
+    pos, vel, acc = trajectory.evaluate(np.atleast_1d(np.asarray(t, dtype=float)))
+    return np.column_stack([pos, vel, acc])
+
+
+def joint_reference(
+    arm: _KinematicArm,
+    trajectory: Trajectory,
+    t: ArrayLike,
+    elbow: str = "positive",
+    *,
+    singularity_tol: float = 1e-3,
+) -> _Triple:
+    """Joint angles, rates and accelerations of a rigid two-link arm that follow a path.
+
+    ``theta`` comes from ``arm.inverse_kinematics``; the rates solve
+    ``J(theta) dtheta = v`` and the accelerations
+    ``J(theta) ddtheta = a - Jdot(theta, dtheta) dtheta``, where for a planar
+    chain with absolute link angles ``phi_i = theta_1 + ... + theta_i``,
+    ``Jdot dtheta = -sum_i L_i dphi_i**2 (cos phi_i, sin phi_i)``.
+
+    Parameters
+    ----------
+    arm : FlexibleArm or alike
+        Two-link arm: needs ``n_links``, ``links[i].length`` (m),
+        ``inverse_kinematics(position, elbow)`` and ``jacobian(theta)``.
+    trajectory : Trajectory
+        The end-effector path.
+    t : float or array_like, shape (m,)
+        Times, s.
+    elbow : {"positive", "negative"}
+        The inverse-kinematics branch (sign of ``theta_2``).
+    singularity_tol : float
+        Smallest allowed ``|det J| / (L_1 L_2) = |sin theta_2|`` (> 0). The
+        default 1e-3 (``theta_2`` within 0.057 deg of 0 or pi: full reach or
+        folded back over the base) is where the rates exceed ~1000 times the
+        path speed divided by a link length.
+
+    Returns
+    -------
+    theta, dtheta, ddtheta : ndarray, shape (m, 2) or (2,)
+        In rad, rad/s and rad/s**2. ``theta_1`` is wrapped to ``[-pi, pi)``
+        as the inverse kinematics return it (use ``numpy.unwrap`` along time
+        for a path that circles the base).
+
+    Raises
+    ------
+    ValueError
+        If the arm does not have two links, the path leaves the workspace at
+        some ``t``, or passes within ``singularity_tol`` of a singularity at
+        some ``t`` (only the sampled times are checked).
+
+    Examples
+    --------
+    >>> from flexarm import FlexibleArm
+    >>> th, dth, ddth = joint_reference(FlexibleArm.paper(), Square(), [0.0, 2.5])
+    >>> th.shape, dth.shape
+    ((2, 2), (2, 2))
+    """
+    owner = "joint_reference"
+    _check_trajectory(trajectory, owner)
+    check_option(elbow, "elbow", owner, ELBOWS)
+    tol = check_real(singularity_tol, "singularity_tol", owner, positive=True)
+    n = int(arm.n_links)
+    if n != 2:
+        raise ValueError(
+            f"The 'arm' parameter of {owner} must have 2 links. Got {n} links instead."
+        )
+    tt, scalar = _times(t, owner)
+    pos, vel, acc = trajectory.evaluate(tt)
+    try:
+        theta = arm.inverse_kinematics(pos, elbow=elbow)
+    except ValueError as exc:
+        raise ValueError(
+            f"The 'trajectory' parameter of {owner} must stay inside the arm's workspace. {exc}"
+        ) from exc
+    lengths = np.array([float(lk.length) for lk in arm.links])
+    jac = arm.jacobian(theta)
+    near = np.abs(np.linalg.det(jac)) / (lengths[0] * lengths[1])
+    if np.any(near < tol):
+        k = int(np.argmax(near < tol))
+        raise ValueError(
+            f"The 'trajectory' parameter of {owner} must stay clear of singularities, "
+            f"with |det J| / (L1 L2) >= {tol}. Got {near[k]:.3g} at t = {tt[k]} s, at "
+            f"{pos[k].tolist()} m ({int(np.sum(near < tol))} samples too close) instead."
+        )
+    dtheta: _F = np.linalg.solve(jac, vel[:, :, None])[:, :, 0].astype(np.float64)
+    phi = np.cumsum(theta, axis=1)
+    dphi = np.cumsum(dtheta, axis=1)
+    weight = lengths * dphi**2
+    jdot_dtheta = -np.stack(
+        [np.sum(weight * np.cos(phi), axis=1), np.sum(weight * np.sin(phi), axis=1)], axis=1
+    )
+    ddtheta: _F = np.linalg.solve(jac, (acc - jdot_dtheta)[:, :, None])[:, :, 0]
+    return _shape_out((theta, dtheta, ddtheta), scalar)

@@ -1,0 +1,330 @@
+"""The closed-loop simulator: integrator accuracy, sensors, delays, controllers,
+divergence, results."""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+import pytest
+
+import flexarm as fa
+from flexarm import simloop
+from flexarm.controllers import CompiledController, JacobianTransposePD, JointPD
+from flexarm.delays import DelayModel
+from flexarm.results import SimulationResult
+from flexarm.sensors import JointSensor, PointSensor, TipSensor, parse_sensor
+from flexarm.simulate import SimulationError, simulate
+from flexarm.trajectories import Circle, Line, Square
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return fa.FlexibleArm.paper()
+
+
+@pytest.fixture(scope="module")
+def rigid():
+    return fa.FlexibleArm([fa.Link(1.0, 1.0, 1.0, n_modes=0, hub_inertia=0.05)] * 2)
+
+
+@pytest.fixture(scope="module")
+def short_square():
+    return Square(center=(5.0, 0.0), side=2.0, time_per_side=0.5)
+
+
+# ------------------------------------------------------------------ controllers
+def test_jacobian_transpose_gains_from_the_paper(paper):
+    c = JacobianTransposePD.from_arm(paper)
+    w1 = paper.link_frequencies[0][0]
+    assert c.kp == pytest.approx(w1**2) and c.kp == pytest.approx(150.8, abs=0.05)
+    assert c.kd == pytest.approx(2 * 0.707 * w1) and c.kd == pytest.approx(17.364, abs=2e-3)
+
+
+def test_compiled_jacobian_transpose_law_matches_numpy(paper):
+    c = JacobianTransposePD(kp=[[120.0, 5.0], [-3.0, 90.0]], kd=[10.0, 14.0])
+    rng = np.random.default_rng(0)
+    p = c.parameters(paper)
+    for _ in range(5):
+        y = rng.normal(size=2 * 2 + 4 + 2)
+        r = rng.normal(size=10)
+        kp = np.array([[120.0, 5.0], [-3.0, 90.0]])
+        kd = np.diag([10.0, 14.0])
+        expected = paper.jacobian(y[:2]).T @ (kp @ (r[:2] - y[4:6]) + kd @ (r[2:4] - y[6:8]))
+        np.testing.assert_allclose(c(0.0, y, r, p, np.zeros(0)), expected, rtol=1e-12)
+
+
+def test_compiled_joint_pd_matches_formula(paper):
+    c = JointPD(kp=[50.0, 30.0], kd=4.0)
+    y = np.array([0.1, -0.2, 0.3, 0.4, 0, 0, 0, 0, 0, 0])
+    r = np.zeros(10)
+    r[6:8], r[8:10] = [0.5, 0.5], [1.0, -1.0]
+    tau = c(0.0, y, r, c.parameters(paper), np.zeros(0))
+    np.testing.assert_allclose(tau, [50 * 0.4 + 4 * 0.7, 30 * 0.7 + 4 * -1.4])
+
+
+@numba.njit
+def _damp_joints(t, y, r, params, state, tau):
+    n = tau.shape[0]
+    state[0] += 1.0  # counts the calls
+    for i in range(n):
+        tau[i] = params[0] * (r[6 + i] - y[i]) + params[1] * (r[6 + n + i] - y[n + i])
+
+
+def test_user_compiled_controller_plugs_in(rigid):
+    ctrl = CompiledController(_damp_joints, params=[400.0, 40.0], state=[0.0])
+    res = simulate(rigid, ctrl, Line((1.2, 0.3), (1.0, 0.8), 2.0), dt=1e-3, duration=3.0)
+    assert res.metrics()["max_error_m"] < 0.01
+    assert res.info["controller"] == "compiled"
+    assert res.info["controller_state"] == [3000.0]  # one call per control period
+
+
+def test_compiled_controller_rejects_plain_functions():
+    with pytest.raises(TypeError, match="'function'"):
+        CompiledController(lambda *a: None)
+
+
+# ------------------------------------------------------------------ tracking
+def test_rigid_arm_tracks_a_slow_reference(rigid):
+    traj = Circle(center=(1.2, 0.0), radius=0.3, period=8.0)
+    res = simulate(rigid, JacobianTransposePD(kp=400.0, kd=60.0), traj, dt=1e-3)
+    m = res.metrics()
+    assert m["max_error_m"] < 0.02
+    assert m["rms_error_m"] < 0.01
+    assert res.info["status"] == "ok"
+
+
+def test_rk4_matches_the_adaptive_reference(paper, short_square):
+    kw = dict(trajectory=short_square, dt=2e-4, duration=0.6)
+    fixed = simulate(paper, **kw)
+    ref = simulate(paper, method="scipy", **kw)
+    np.testing.assert_allclose(fixed.q, ref.q, atol=1e-6 * np.abs(ref.q).max())
+    np.testing.assert_allclose(fixed.tau, ref.tau, rtol=1e-5, atol=1e-6 * np.abs(ref.tau).max())
+
+
+def test_substeps_converge_at_fourth_order(rigid):
+    traj = Circle(center=(1.2, 0.0), radius=0.3, period=2.0)
+    ctrl = JacobianTransposePD(kp=400.0, kd=60.0)
+    kw = dict(dt=5e-3, duration=0.5)
+    q = [simulate(rigid, ctrl, traj, substeps=s, **kw).q[-1] for s in (1, 2, 4, 32)]
+    e1, e2, e4 = (np.abs(x - q[-1]).max() for x in q[:3])
+    assert e1 / e2 > 8 and e2 / e4 > 8  # 2**4 = 16 ideally
+
+
+# ------------------------------------------------------------------ sensors
+def test_joint_sensor_measurement_is_rigid_kinematics(paper, short_square):
+    res = simulate(paper, trajectory=short_square, duration=0.2)
+    th = res.q[:, :2]
+    np.testing.assert_allclose(res.measurement[:, 0:2], th, atol=1e-15)
+    np.testing.assert_allclose(res.measurement[:, 4:6], paper.forward_kinematics(th), atol=1e-12)
+    np.testing.assert_allclose(res.measurement[:, 8:], res.q[:, 2:], atol=1e-15)
+
+
+# Noncollocated PD feedback is unstable on this arm (tests below show it), so the
+# sensor and delay tests close the loop on the encoders (JointPD reads the undelayed
+# encoder angles with a noncollocated sensor) and only record the sensed signal.
+COLLOCATED = JointPD(kp=2000.0, kd=300.0)
+
+
+def test_point_sensor_measures_the_deflected_point(paper, short_square):
+    ctrl = COLLOCATED
+    res = simulate(paper, ctrl, short_square, sensor=PointSensor(1, 0.5), duration=0.3)
+    expected = paper.point_position(res.q, 1, 0.5)
+    np.testing.assert_allclose(res.measurement[:, 4:6], expected, atol=1e-12)
+
+
+def test_tip_sensor_is_the_end_effector(paper, short_square):
+    ctrl = COLLOCATED
+    res = simulate(paper, ctrl, short_square, sensor=TipSensor(), duration=0.3)
+    np.testing.assert_allclose(res.measurement[:, 4:6], res.tip, atol=1e-12)
+
+
+def test_exact_delay_shifts_the_signal_by_exactly_the_delay(paper, short_square):
+    ctrl = COLLOCATED
+    dt, delay = 2e-4, 0.01  # 50 samples
+    res = simulate(
+        paper,
+        ctrl,
+        short_square,
+        sensor=TipSensor(),
+        delay=DelayModel(delay, "exact"),
+        dt=dt,
+        duration=0.3,
+    )
+    k = round(delay / dt)
+    np.testing.assert_allclose(res.measurement[k:, 4:6], res.tip[:-k], atol=1e-12)
+    np.testing.assert_allclose(res.measurement[:k, 4:6], np.repeat(res.tip[:1], k, 0), atol=1e-12)
+    assert res.info["effective_delay_s"] == pytest.approx(delay)
+
+
+def test_pade_delay_approximates_the_exact_delay(paper, short_square):
+    ctrl = COLLOCATED
+    kw = dict(sensor=TipSensor(), dt=2e-4, duration=0.4)
+    exact = simulate(paper, ctrl, short_square, delay=DelayModel(0.01, "exact"), **kw)
+    errs = []
+    for order in (1, 2, 4):
+        pade = simulate(paper, ctrl, short_square, delay=DelayModel(0.01, "pade", order), **kw)
+        errs.append(np.abs(pade.measurement[:, 4:6] - exact.measurement[:, 4:6]).max())
+    assert errs[0] > errs[1] > errs[2]
+    assert errs[2] < 1e-3
+
+
+def test_delay_reference_shifts_the_command(paper, short_square):
+    res = simulate(
+        paper,
+        COLLOCATED,
+        short_square,
+        sensor=TipSensor(),
+        delay=DelayModel(0.02, "exact"),
+        delay_reference=True,
+        duration=0.3,
+    )
+    t = res.t
+    np.testing.assert_allclose(
+        res.reference[:, 0:2], short_square.evaluate(t - 0.02)[0], atol=1e-12
+    )
+    np.testing.assert_allclose(res.desired, short_square.evaluate(t)[0], atol=1e-12)
+
+
+def test_noise_is_seeded_and_quantisation_rounds(paper, short_square):
+    sensor = JointSensor(noise_std=1e-3, quantization=1e-3)
+    a = simulate(paper, trajectory=short_square, sensor=sensor, duration=0.1, rng=3)
+    b = simulate(paper, trajectory=short_square, sensor=sensor, duration=0.1, rng=3)
+    c = simulate(paper, trajectory=short_square, sensor=sensor, duration=0.1, rng=4)
+    np.testing.assert_array_equal(a.measurement, b.measurement)
+    assert not np.array_equal(a.measurement, c.measurement)
+    angles = a.measurement[:, :2] / 1e-3
+    np.testing.assert_allclose(angles, np.round(angles), atol=1e-9)
+
+
+def test_torque_saturation(paper, short_square):
+    res = simulate(paper, trajectory=short_square, torque_limit=5.0, duration=0.5)
+    assert np.nanmax(np.abs(res.tau)) <= 5.0
+    assert np.isclose(np.nanmax(np.abs(res.tau)), 5.0)
+
+
+@pytest.mark.parametrize(
+    ("spec", "expected"),
+    [("joint", JointSensor()), ("tip", TipSensor()), ("point:1:0.5", PointSensor(1, 0.5))],
+)
+def test_parse_sensor(spec, expected):
+    assert parse_sensor(spec) == expected
+
+
+@pytest.mark.parametrize("spec", ["elbow", "point:1", "point:x:0.5", "point:1:-2", "point:1:a"])
+def test_parse_sensor_rejects(spec):
+    with pytest.raises(ValueError, match=r"sensor|distance"):
+        parse_sensor(spec)
+
+
+# ------------------------------------------------------------------ divergence
+def test_divergence_raises_with_time_state_and_partial_result(paper, short_square):
+    # tip feedback with the paper's gains is unstable (closed-loop poles at +120, +70 rad/s)
+    with pytest.raises(SimulationError) as info:
+        simulate(paper, trajectory=short_square, sensor=TipSensor())
+    err = info.value
+    assert 0 < err.time < short_square.duration
+    assert err.state.shape == (2 * paper.n_dof,)
+    assert err.result.t[-1] == pytest.approx(err.time)
+    assert np.all(np.isfinite(err.result.q))
+    assert "diverged" in str(err)
+
+
+def test_sampled_data_instability_at_one_kilohertz_is_detected(paper, short_square):
+    """The hubless paper arm under the paper's JT gains needs dt well below 1 ms
+    (its fastest closed-loop pole is near -1700 rad/s)."""
+    with pytest.raises(SimulationError):
+        simulate(paper, trajectory=Square(), dt=1e-3)
+
+
+# ------------------------------------------------------------------ results
+def test_result_save_load_round_trip(tmp_path, paper, short_square):
+    res = simulate(paper, trajectory=short_square, duration=0.2)
+    path = res.save(tmp_path / "run.npz")
+    back = SimulationResult.load(path)
+    for name in ("t", "q", "dq", "tau", "reference", "desired", "measurement", "tip"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(res, name))
+    assert back.info == res.info and back.coordinate_names == res.coordinate_names
+    assert list(tmp_path.iterdir()) == [path]  # no temporary files left behind
+
+
+def test_result_load_rejects_malformed_files(tmp_path):
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(b"not a zip")
+    with pytest.raises(ValueError, match="not a flexarm simulation result"):
+        SimulationResult.load(bad)
+    other = tmp_path / "other.npz"
+    np.savez(other, x=np.zeros(3))
+    with pytest.raises(ValueError, match="not a flexarm simulation result"):
+        SimulationResult.load(other)
+
+
+def test_result_metrics_and_series(paper):
+    res = simulate(paper, trajectory=Square(side=2.0, time_per_side=1.0), duration=5.0)
+    m = res.metrics()
+    assert m["max_error_m"] >= m["rms_error_m"] > 0
+    assert len(m["corner_errors_m"]) == 4
+    assert m["sim_time_s"] == pytest.approx(5.0)
+    np.testing.assert_allclose(res.error, np.linalg.norm(res.tip - res.desired, axis=1))
+    assert res.link_deflections.shape == (res.t.size, 2)
+    # the motion ends at 4 s: the residual vibration is measured over the last second
+    assert m["residual_vibration_m"] > 0
+
+
+def test_to_pandas(paper, short_square):
+    pd = pytest.importorskip("pandas")
+    df = simulate(paper, trajectory=short_square, duration=0.1).to_pandas()
+    assert isinstance(df, pd.DataFrame)
+    assert {"theta1", "dtheta1", "tau1", "x_tip", "error"} <= set(df.columns)
+
+
+def test_plot_returns_a_figure(paper, short_square):
+    res = simulate(paper, trajectory=short_square, duration=0.2)
+    fig = res.plot()
+    assert len(fig.axes) == 3
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+
+
+# ------------------------------------------------------------------ flexible joints
+def test_simulates_an_arm_with_flexible_joints():
+    arm = fa.FlexibleArm.paper(joints=[fa.NonlinearJoint.default(fa.MakkarFriction.default())] * 2)
+    res = simulate(arm, trajectory=Square(side=2.0, time_per_side=1.0), duration=1.0)
+    assert res.q.shape[1] == arm.n_dof
+    # the encoders read the motor angles
+    np.testing.assert_allclose(res.measurement[:, :2], res.q[:, arm.motor_slice], atol=1e-15)
+
+
+# ------------------------------------------------------------------ bad input
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"dt": 0.0}, ValueError, "'dt'"),
+        ({"dt": float("nan")}, ValueError, "'dt'"),
+        ({"duration": -1.0}, ValueError, "'duration'"),
+        ({"substeps": 0}, ValueError, "'substeps'"),
+        ({"method": "euler"}, ValueError, "'method'"),
+        ({"elbow": "up"}, ValueError, "'elbow'"),
+        ({"controller": "pd"}, TypeError, "'controller'"),
+        ({"sensor": "tip"}, TypeError, "'sensor'"),
+        ({"delay": 0.1}, TypeError, "'delay'"),
+        ({"torque_limit": -1.0}, ValueError, "'torque_limit'"),
+        ({"torque_limit": [1.0, 2.0, 3.0]}, ValueError, "'torque_limit'"),
+        ({"initial_state": np.zeros(3)}, ValueError, "'initial_state'"),
+        ({"rng": "seed"}, TypeError, "'rng'"),
+        ({"sensor": PointSensor(2, 0.5)}, ValueError, "'link'"),
+        ({"sensor": PointSensor(1, 5.0)}, ValueError, "'distance'"),
+    ],
+)
+def test_simulate_rejects_bad_input(paper, kwargs, error, match):
+    with pytest.raises(error, match=match):
+        simulate(paper, **({"duration": 0.01} | kwargs))
+
+
+def test_unreachable_trajectory_is_rejected(paper):
+    with pytest.raises(ValueError, match="reachable"):
+        simulate(paper, trajectory=Square(center=(8.0, 0.0), side=4.0))
+
+
+def test_loop_state_layout():
+    assert simloop.OK == 0 and simloop.DIVERGED == 1
