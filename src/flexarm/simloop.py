@@ -64,7 +64,7 @@ class LoopState(NamedTuple):
     buffer: F64  # (delay_steps + 1, n_channels) ring of sensed signals
     cursor: NDArray[np.int64]  # (1,) substeps integrated so far
     pade_x: F64  # (n_channels, p) filter states
-    scratch: F64  # (9, n) RK4 stages and temporaries (row 1 unused)
+    scratch: F64  # (6, n) RK4 stages
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -107,32 +107,44 @@ def _diverged(q: F64, dq: F64, model: ArmArrays, max_deflection: F64) -> bool:
     return False
 
 
+_RK4_C = (0.0, 0.5, 0.5, 1.0)
+_RK4_W = (1.0, 2.0, 2.0, 1.0)
+
+
 @nb.njit(cache=True, nogil=True)
 def _rk4(
     q: F64, dq: F64, tau: F64, h: float, model: ArmArrays, ws: Workspace, s: F64
 ) -> None:  # pragma: no cover - compiled
-    """One classical RK4 step of ``qdd = f(q, dq, tau)`` in place; ``s`` is (9, n) scratch."""
+    """One classical RK4 step of ``qdd = f(q, dq, tau)`` in place; ``s`` is (6, n) scratch.
+
+    The four stages run in a loop with a single call of the dynamics, so the
+    (inlined) kernel is compiled once.
+    """
     n = q.shape[0]
-    qt = s[0]
-    a1, a2, a3, a4 = s[2], s[3], s[4], s[5]
-    v2, v3, v4 = s[6], s[7], s[8]
-    forward_dynamics(q, dq, tau, model, ws, a1)
+    qs, vs, acc = s[0], s[1], s[2]
+    sum_v, sum_a, v_prev = s[3], s[4], s[5]
     for r in range(n):
-        qt[r] = q[r] + 0.5 * h * dq[r]
-        v2[r] = dq[r] + 0.5 * h * a1[r]
-    forward_dynamics(qt, v2, tau, model, ws, a2)
+        sum_v[r] = 0.0
+        sum_a[r] = 0.0
+    for stage in range(4):
+        c = _RK4_C[stage] * h
+        for r in range(n):
+            if stage == 0:
+                qs[r] = q[r]
+                vs[r] = dq[r]
+            else:
+                qs[r] = q[r] + c * v_prev[r]
+                vs[r] = dq[r] + c * acc[r]
+        forward_dynamics(qs, vs, tau, model, ws, acc)
+        w = _RK4_W[stage]
+        for r in range(n):
+            sum_v[r] += w * vs[r]
+            sum_a[r] += w * acc[r]
+            v_prev[r] = vs[r]
+    c6 = h / 6.0
     for r in range(n):
-        qt[r] = q[r] + 0.5 * h * v2[r]
-        v3[r] = dq[r] + 0.5 * h * a2[r]
-    forward_dynamics(qt, v3, tau, model, ws, a3)
-    for r in range(n):
-        qt[r] = q[r] + h * v3[r]
-        v4[r] = dq[r] + h * a3[r]
-    forward_dynamics(qt, v4, tau, model, ws, a4)
-    c = h / 6.0
-    for r in range(n):
-        q[r] += c * (dq[r] + 2.0 * v2[r] + 2.0 * v3[r] + v4[r])
-        dq[r] += c * (a1[r] + 2.0 * a2[r] + 2.0 * a3[r] + a4[r])
+        q[r] += c6 * sum_v[r]
+        dq[r] += c6 * sum_a[r]
 
 
 @nb.njit(cache=True, nogil=True)

@@ -298,7 +298,7 @@ def simulate(
         np.zeros((delay_steps + 1, n_ch)),
         np.zeros(1, dtype=np.int64),
         np.zeros((n_ch, order)),
-        np.zeros((9, n)),
+        np.zeros((6, n)),
     )
     _prime_delay_line(arm, sensor_arrays, state)
     info = {
