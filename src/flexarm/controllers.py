@@ -37,6 +37,7 @@ from numba import carray, types  # type: ignore[attr-defined]
 from numpy.typing import ArrayLike, NDArray
 
 from ._validation import check_array, check_real
+from .kernels import njit_runtime_free
 
 __all__ = [
     "CONTROL_SIGNATURE",
@@ -46,6 +47,8 @@ __all__ = [
     "JointPD",
     "wrap_control_function",
 ]
+
+F64 = NDArray[np.float64]
 
 _P = types.CPointer(types.float64)  # type: ignore[no-untyped-call]
 CONTROL_SIGNATURE = types.void(
@@ -72,15 +75,19 @@ def wrap_control_function(fn: Any, cache: bool = False) -> Any:
 
 
 # ------------------------------------------------------------------ built-ins
-@nb.njit(cache=True, nogil=True)
-def _joint_pd(t, y, r, p, s, tau):  # type: ignore[no-untyped-def]  # pragma: no cover
+@njit_runtime_free(cache=True, nogil=True)
+def _joint_pd(
+    t: float, y: F64, r: F64, p: F64, s: F64, tau: F64
+) -> None:  # pragma: no cover - compiled
     n = tau.shape[0]
     for i in range(n):
         tau[i] = p[i] * (r[6 + i] - y[i]) + p[n + i] * (r[6 + n + i] - y[n + i])
 
 
-@nb.njit(cache=True, nogil=True)
-def _jacobian_transpose_pd(t, y, r, p, s, tau):  # type: ignore[no-untyped-def]  # pragma: no cover
+@njit_runtime_free(cache=True, nogil=True)
+def _jacobian_transpose_pd(
+    t: float, y: F64, r: F64, p: F64, s: F64, tau: F64
+) -> None:  # pragma: no cover
     n = tau.shape[0]
     px, py = y[2 * n], y[2 * n + 1]
     vx, vy = y[2 * n + 2], y[2 * n + 3]

@@ -20,7 +20,14 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from .kernels import LEN, ArmArrays, Workspace, forward_dynamics, point_kinematics
+from .kernels import (
+    LEN,
+    ArmArrays,
+    Workspace,
+    forward_dynamics,
+    njit_runtime_free,
+    point_kinematics,
+)
 
 __all__ = ["LoopState", "SensorArrays", "run"]
 
@@ -40,6 +47,7 @@ class SensorArrays(NamedTuple):
         (p,), (1,); p = 0 for no Padé.
     noise: (n_steps + 1, n_channels) additive noise per control instant, or (0, n_channels).
     resolution: (n_channels,) quantisation steps (0: none).
+    tip_phi: (n_modes of the last link,) — its mode shapes at the tip (for recording).
     """
 
     link: NDArray[np.int64]
@@ -52,6 +60,7 @@ class SensorArrays(NamedTuple):
     pade_dd: F64
     noise: F64
     resolution: F64
+    tip_phi: F64
 
 
 class LoopState(NamedTuple):
@@ -65,6 +74,12 @@ class LoopState(NamedTuple):
     cursor: NDArray[np.int64]  # (1,) substeps integrated so far
     pade_x: F64  # (n_channels, p) filter states
     scratch: F64  # (6, n) RK4 stages
+    ws: Workspace  # dynamics scratch
+    signals: F64  # (2 n_channels + n_y + 4 + max(p, 1),) signal scratch
+
+    @staticmethod
+    def signal_size(n_channels: int, n_y: int, order: int) -> int:
+        return 2 * n_channels + n_y + 4 + max(order, 1)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -76,7 +91,7 @@ def _collocated(q: F64, dq: F64, model: ArmArrays, i: int, n_links: int) -> tupl
     return q[i], dq[i]
 
 
-@nb.njit(cache=True, nogil=True)
+@njit_runtime_free(cache=True, nogil=True)
 def _sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> None:
     """The raw (true, undelayed) sensed signal."""
     n_links = model.link.shape[0]
@@ -111,7 +126,7 @@ _RK4_C = (0.0, 0.5, 0.5, 1.0)
 _RK4_W = (1.0, 2.0, 2.0, 1.0)
 
 
-@nb.njit(cache=True, nogil=True)
+@njit_runtime_free(cache=True, nogil=True)
 def _rk4(
     q: F64, dq: F64, tau: F64, h: float, model: ArmArrays, ws: Workspace, s: F64
 ) -> None:  # pragma: no cover - compiled
@@ -147,7 +162,7 @@ def _rk4(
         dq[r] += c6 * sum_a[r]
 
 
-@nb.njit(cache=True, nogil=True)
+@njit_runtime_free(cache=True, nogil=True)
 def run(
     model: ArmArrays,
     control: Any,  # FunctionType: see flexarm.controllers.CONTROL_SIGNATURE
@@ -180,18 +195,20 @@ def run(
     n_modes = ms[n_links] - n_links
     n_steps = reference.shape[0] - 1
     h = dt / substeps
-    ws = Workspace(np.zeros((n, n)), np.zeros(n), np.zeros((2, n)), np.zeros(n), np.zeros(n))
+    ws = state.ws
     q, dq, tau = state.q, state.dq, state.tau
     n_ch = state.buffer.shape[1]
-    raw = np.zeros(n_ch)
-    delayed = np.zeros(n_ch)
-    y = np.zeros(out_y.shape[1])
-    tip = np.zeros(4)
+    n_y = out_y.shape[1]
+    sig = state.signals  # views into preallocated scratch: no allocation here
+    raw = sig[0:n_ch]
+    delayed = sig[n_ch : 2 * n_ch]
+    y = sig[2 * n_ch : 2 * n_ch + n_y]
+    tip = sig[2 * n_ch + n_y : 2 * n_ch + n_y + 4]
+    x_new = sig[2 * n_ch + n_y + 4 :]
     last = n_links - 1
-    tip_phi = model.tip_deflection[ms[last] : ms[last + 1]].copy()
+    tip_phi = sensor.tip_phi
     n_buf = state.buffer.shape[0]
     order = sensor.pade_ad.shape[0]
-    x_new = np.zeros(max(order, 1))
     has_noise = sensor.noise.shape[0] > 0
     joint_sensor = sensor.link[0] < 0
     for k in range(k0, k1):

@@ -278,6 +278,7 @@ def simulate(
         np.ascontiguousarray(dd),
         noise,
         resolution,
+        np.ascontiguousarray(arm.modes[-1].tip_deflection, dtype=float),
     )
 
     # ------------------------------------------------------------ run
@@ -299,6 +300,8 @@ def simulate(
         np.zeros(1, dtype=np.int64),
         np.zeros((n_ch, order)),
         np.zeros((6, n)),
+        kernels.make_workspace(n),
+        np.zeros(simloop.LoopState.signal_size(n_ch, ny, order)),
     )
     _prime_delay_line(arm, sensor_arrays, state)
     info = {
@@ -487,16 +490,7 @@ def _run_scipy(
     # one compiled step per control instant records the measurement and the torque:
     # reuse the compiled loop with zero plant motion by passing one row at a time.
     for k in range(n_rows):
-        st = simloop.LoopState(
-            q.copy(),
-            dq.copy(),
-            state.tau,
-            state.ctrl_state,
-            state.buffer,
-            state.cursor,
-            state.pade_x,
-            state.scratch,
-        )
+        st = state._replace(q=q.copy(), dq=dq.copy())
         last = k == n_rows - 1
         # record and act at k (the loop integrates one RK4 substep we then discard)
         simloop.run(
