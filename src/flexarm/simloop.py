@@ -47,7 +47,6 @@ class SensorArrays(NamedTuple):
         (p,), (1,); p = 0 for no Padé.
     noise: (n_steps + 1, n_channels) additive noise per control instant, or (0, n_channels).
     resolution: (n_channels,) quantisation steps (0: none).
-    tip_phi: (n_modes of the last link,) — its mode shapes at the tip (for recording).
     """
 
     link: NDArray[np.int64]
@@ -60,7 +59,6 @@ class SensorArrays(NamedTuple):
     pade_dd: F64
     noise: F64
     resolution: F64
-    tip_phi: F64
 
 
 class LoopState(NamedTuple):
@@ -75,11 +73,11 @@ class LoopState(NamedTuple):
     pade_x: F64  # (n_channels, p) filter states
     scratch: F64  # (6, n) RK4 stages
     ws: Workspace  # dynamics scratch
-    signals: F64  # (2 n_channels + n_y + 4 + max(p, 1),) signal scratch
+    signals: F64  # (2 n_channels + n_y + max(p, 1),) signal scratch
 
     @staticmethod
     def signal_size(n_channels: int, n_y: int, order: int) -> int:
-        return 2 * n_channels + n_y + 4 + max(order, 1)
+        return 2 * n_channels + n_y + max(order, 1)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -180,7 +178,6 @@ def run(
     out_dq: F64,
     out_tau: F64,
     out_y: F64,
-    out_tip: F64,
 ) -> tuple[int, int]:  # pragma: no cover - compiled
     """Advance the loop over control instants ``k0 <= k < k1`` (record at each ``k``,
     then act and integrate to ``k + 1`` unless ``k`` is the last row of ``reference``).
@@ -203,10 +200,7 @@ def run(
     raw = sig[0:n_ch]
     delayed = sig[n_ch : 2 * n_ch]
     y = sig[2 * n_ch : 2 * n_ch + n_y]
-    tip = sig[2 * n_ch + n_y : 2 * n_ch + n_y + 4]
-    x_new = sig[2 * n_ch + n_y + 4 :]
-    last = n_links - 1
-    tip_phi = sensor.tip_phi
+    x_new = sig[2 * n_ch + n_y :]
     n_buf = state.buffer.shape[0]
     order = sensor.pade_ad.shape[0]
     has_noise = sensor.noise.shape[0] > 0
@@ -270,14 +264,11 @@ def run(
         for j in range(n_modes):
             y[2 * n_links + 4 + j] = q[n_links + j]
         # ---- record
-        point_kinematics(q, dq, model, last, model.link[last, LEN], tip_phi, tip)
         for r in range(n):
             out_q[k, r] = q[r]
             out_dq[k, r] = dq[r]
         for c in range(y.shape[0]):
             out_y[k, c] = y[c]
-        out_tip[k, 0] = tip[0]
-        out_tip[k, 1] = tip[1]
         if k == n_steps:
             for i in range(n_links):
                 out_tau[k, i] = tau[i]

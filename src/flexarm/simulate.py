@@ -278,7 +278,6 @@ def simulate(
         np.ascontiguousarray(dd),
         noise,
         resolution,
-        np.ascontiguousarray(arm.modes[-1].tip_deflection, dtype=float),
     )
 
     # ------------------------------------------------------------ run
@@ -344,6 +343,8 @@ def simulate(
         )
     info["wall_time_s"] = time.perf_counter() - start
     info["controller_state"] = state.ctrl_state.tolist()
+    done = np.all(np.isfinite(out["q"]), axis=1)
+    out["tip"][done] = arm.tip_position(out["q"][done])
     info["status"] = "ok" if status == simloop.OK else "diverged"
     result = SimulationResult(
         t=t,
@@ -442,7 +443,6 @@ def _run_chunks(
             out["dq"],
             out["tau"],
             out["measurement"],
-            out["tip"],
         )
         if show:
             _progress_bar((c + 1) / n_chunks)
@@ -510,7 +510,6 @@ def _run_scipy(
             out["dq"],
             out["tau"],
             out["measurement"],
-            out["tip"],
         )
         if last:
             return simloop.OK, k
