@@ -27,6 +27,7 @@ LAYERS = {
     "results": 4,
     "simloop": 4,
     "simulate": 5,
+    "scenario": 6,
     "cli": 9,
     "__main__": 9,
     "__init__": 9,

@@ -180,6 +180,9 @@ class SimulationResult:
         try:
             with os.fdopen(fd, "wb") as fh:
                 np.savez_compressed(fh, meta=np.array(json.dumps(meta)), **arrays)
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; use the usual mode
             os.replace(tmp, path)
         except BaseException:
             Path(tmp).unlink(missing_ok=True)
