@@ -15,10 +15,14 @@ def test_readme_has_python_examples():
     assert len(BLOCKS) >= 2
 
 
-def test_readme_examples_run():
+def test_readme_examples_run(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # the examples write files
     namespace: dict[str, object] = {}
     for block in BLOCKS:  # later blocks use names from earlier ones, as a reader would
         try:
             exec(compile(block, str(README), "exec"), namespace)
         except Exception as exc:  # pragma: no cover - the failure message is the point
             pytest.fail(f"README example failed: {exc!r}\n{block}")
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
