@@ -394,11 +394,8 @@ def _sense_python(
         idx = arm.actuated_slice
         angles: NDArray[np.float64] = np.r_[q[idx], dq[idx]]
         return angles
-    distance = float(sensor.distance[0])
-    p = arm.point_position(q, link, distance)
-    out = np.zeros(4)
-    kernels.point_kinematics(q, dq, arm.arrays, link, distance, sensor.phi, out)
-    signal: NDArray[np.float64] = np.r_[p, out[2:]]
+    signal: NDArray[np.float64] = np.zeros(4)
+    kernels.point_kinematics(q, dq, arm.arrays, link, float(sensor.distance[0]), sensor.phi, signal)
     return signal
 
 
@@ -487,12 +484,13 @@ def _run_scipy(
     n, N = arm.n_dof, arm.n_links
     q, dq = state.q.copy(), state.dq.copy()
     n_rows = reference.shape[0]
-    # one compiled step per control instant records the measurement and the torque:
-    # reuse the compiled loop with zero plant motion by passing one row at a time.
+    # At each instant the compiled loop, run for that one row on a copy of the state,
+    # forms the measurement and the torque exactly as the fixed-step path does (its
+    # own RK4 step lands in the copy and is discarded); solve_ivp then integrates
+    # the plant over the period under that held torque.
     for k in range(n_rows):
         st = state._replace(q=q.copy(), dq=dq.copy())
         last = k == n_rows - 1
-        # record and act at k (the loop integrates one RK4 substep we then discard)
         simloop.run(
             arm.arrays,
             controller.cfunc,
