@@ -18,8 +18,10 @@ Built in:
   ``tau = J(theta)' [Kp (x_r - x) + Kd (v_r - v)]`` with ``J`` the rigid Jacobian of
   the measured (collocated) angles and ``x, v`` from the sensor in use.
   ``JacobianTransposePD.from_arm(arm, zeta=0.707)`` gives the paper's gains
-  ``Kp = omega_1**2 I``, ``Kd = 2 zeta omega_1 I`` (150.79 and 17.364 for the
-  paper's arm).
+  ``Kp = omega_1**2 I``, ``Kd = 2 zeta omega_1 I`` from the exact first clamped
+  frequency: 150.83 and 17.366 for the paper's arm (the paper prints 150.79 and
+  17.364, from omega_1 rounded to 12.28 rad/s; the class defaults are those
+  printed numbers).
 
 Your own: write ``f(t, y, r, params, state, tau)`` with ``@numba.njit`` and wrap
 it in :class:`CompiledController`.
