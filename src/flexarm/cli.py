@@ -302,27 +302,6 @@ def _json_ready(value: Any) -> Any:
     return value
 
 
-def _timeseries(result: SimulationResult) -> tuple[list[str], np.ndarray]:
-    """Columns and values of timeseries.csv (the columns of ``result.to_pandas()``)."""
-    names = list(result.coordinate_names)
-    header = ["t", *names, *(f"d{n}" for n in names)]
-    header += [f"tau{i + 1}" for i in range(result.n_links)]
-    header += ["x_desired", "y_desired", "x_ref", "y_ref", "x_tip", "y_tip", "error"]
-    table = np.column_stack(
-        [
-            result.t,
-            result.q,
-            result.dq,
-            result.tau,
-            result.desired,
-            result.reference[:, :2],
-            result.tip,
-            result.error,
-        ]
-    )
-    return header, table
-
-
 def _write_outputs(out: Path, result: SimulationResult, summary: dict[str, Any]) -> None:
     """Write every file into a fresh directory beside ``out``, then rename it into place."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -338,7 +317,7 @@ def _write_outputs(out: Path, result: SimulationResult, summary: dict[str, Any])
     try:
         result.save(tmp / "result.npz")
         (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-        header, table = _timeseries(result)
+        header, table = result.table()
         np.savetxt(
             tmp / "timeseries.csv",
             table,

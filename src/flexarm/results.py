@@ -147,22 +147,36 @@ class SimulationResult:
         )
 
     # ------------------------------------------------------------------ export
+    def table(self) -> tuple[list[str], F64]:
+        """Column names and a 2-D array of the main series: t, q, dq, tau, desired,
+        reference and tip positions, error (what ``timeseries.csv`` and
+        :meth:`to_pandas` hold)."""
+        names = list(self.coordinate_names)
+        header = ["t", *names, *(f"d{n}" for n in names)]
+        header += [f"tau{i + 1}" for i in range(self.n_links)]
+        header += ["x_desired", "y_desired", "x_ref", "y_ref", "x_tip", "y_tip", "error"]
+        values = np.column_stack(
+            [
+                self.t,
+                self.q,
+                self.dq,
+                self.tau,
+                self.desired,
+                self.reference[:, :2],
+                self.tip,
+                self.error,
+            ]
+        )
+        return header, values
+
     def to_pandas(self) -> Any:
-        """A ``pandas.DataFrame`` indexed by time (pandas is imported on demand)."""
+        """A ``pandas.DataFrame`` of :meth:`table` indexed by time (pandas is
+        imported on demand)."""
         import pandas as pd
 
-        cols: dict[str, F64] = {}
-        for j, name in enumerate(self.coordinate_names):
-            cols[name] = self.q[:, j]
-        for j, name in enumerate(self.coordinate_names):
-            cols[f"d{name}"] = self.dq[:, j]
-        for i in range(self.n_links):
-            cols[f"tau{i + 1}"] = self.tau[:, i]
-        cols["x_desired"], cols["y_desired"] = self.desired[:, 0], self.desired[:, 1]
-        cols["x_ref"], cols["y_ref"] = self.reference[:, 0], self.reference[:, 1]
-        cols["x_tip"], cols["y_tip"] = self.tip[:, 0], self.tip[:, 1]
-        cols["error"] = self.error
-        return pd.DataFrame(cols, index=pd.Index(self.t, name="t"))
+        header, values = self.table()
+        frame = pd.DataFrame(values, columns=header)
+        return frame.set_index("t")
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write an ``.npz`` file atomically (a temporary file, then a rename)."""
