@@ -41,9 +41,7 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
-import datetime
 import json
-import platform
 import statistics
 import sys
 import time
@@ -53,7 +51,7 @@ from typing import Any
 import numba as nb
 import numpy as np
 
-import flexarm
+from _machine import machine_info
 from flexarm import FlexibleArm, Link, MakkarFriction, NonlinearJoint, kernels
 
 N_STATES = 1024  # states cycled by the compiled driver (power of two)
@@ -211,33 +209,6 @@ def check_pinocchio(pin: Any, arm: FlexibleArm, model: Any, data: Any, rng) -> f
 
 
 # ----------------------------------------------------------------- machine
-def cpu_model() -> str:
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
-def machine_info(pin: Any) -> dict[str, Any]:
-    return {
-        "date": datetime.date.today().isoformat(),
-        "cpu": cpu_model(),
-        "cpus": os.cpu_count(),
-        "loadavg_at_start": list(os.getloadavg()),
-        "platform": platform.platform(),
-        "python": platform.python_version(),
-        "numpy": np.__version__,
-        "numba": nb.__version__,
-        "flexarm": flexarm.__version__,
-        "pinocchio": None if pin is None else pin.__version__,
-        "OPENBLAS_NUM_THREADS": os.environ.get("OPENBLAS_NUM_THREADS"),
-    }
-
-
 # -------------------------------------------------------------------- main
 def run(calls: int, repeat: int, log: Callable[[str], None]) -> dict[str, Any]:
     try:
@@ -249,7 +220,7 @@ def run(calls: int, repeat: int, log: Callable[[str], None]) -> dict[str, Any]:
     py_calls = max(N_PY_STATES, calls // 20)
     np_calls = max(N_PY_STATES, calls // 500)
     rng = np.random.default_rng(SEED)
-    out: dict[str, Any] = {"machine": machine_info(pin), "results": {}, "checks": {}}
+    out: dict[str, Any] = {"machine": machine_info(pinocchio=pin), "results": {}, "checks": {}}
     out["settings"] = {
         "calls_compiled_loop": calls,
         "calls_python": py_calls,

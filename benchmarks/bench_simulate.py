@@ -74,10 +74,8 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
-import datetime
 import json
 import math
-import platform
 import statistics
 import sys
 import time
@@ -86,10 +84,9 @@ from typing import Any
 
 import numba as nb
 import numpy as np
-import scipy
 from scipy.integrate import solve_ivp
 
-import flexarm
+from _machine import machine_info
 from flexarm import FlexibleArm, Link
 from flexarm.controllers import CompiledController, JacobianTransposePD
 from flexarm.simulate import SimulationError, simulate
@@ -331,34 +328,6 @@ def time_mujoco(mujoco: Any, model: Any, repeat: int) -> dict[str, Any]:
 
 
 # ----------------------------------------------------------------- machine
-def cpu_model() -> str:
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
-def machine_info(mujoco: Any) -> dict[str, Any]:
-    return {
-        "date": datetime.date.today().isoformat(),
-        "cpu": cpu_model(),
-        "cpus": os.cpu_count(),
-        "loadavg_at_start": list(os.getloadavg()),
-        "platform": platform.platform(),
-        "python": platform.python_version(),
-        "numpy": np.__version__,
-        "scipy": scipy.__version__,
-        "numba": nb.__version__,
-        "flexarm": flexarm.__version__,
-        "mujoco": None if mujoco is None else mujoco.__version__,
-        "OPENBLAS_NUM_THREADS": os.environ.get("OPENBLAS_NUM_THREADS"),
-    }
-
-
 # -------------------------------------------------------------------- main
 def run(
     repeat: int, scipy_repeat: int, horizon: float, log: Callable[[str], None]
@@ -369,7 +338,7 @@ def run(
         mujoco = None
         log(f"mujoco not importable ({exc}); skipping the anchor (pip install mujoco)")
 
-    out: dict[str, Any] = {"machine": machine_info(mujoco), "results": {}, "checks": {}}
+    out: dict[str, Any] = {"machine": machine_info(mujoco=mujoco), "results": {}, "checks": {}}
     out["settings"] = {
         "repeat": repeat,
         "scipy_repeat": scipy_repeat,
