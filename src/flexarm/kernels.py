@@ -124,6 +124,7 @@ class Workspace(NamedTuple):
     jac: F64  # (2, n) base/tip velocity Jacobian, link frame
     angle: F64  # (n,) gradient of the link's absolute angle
     rhs: F64  # (n,)
+    rows: F64  # (3, n) rows of the body inertia times the body Jacobian
 
 
 def make_workspace(n_dof: int) -> Workspace:
@@ -134,6 +135,7 @@ def make_workspace(n_dof: int) -> Workspace:
         np.zeros((2, n_dof)),
         np.zeros(n_dof),
         np.zeros(n_dof),
+        np.zeros((3, n_dof)),
     )
 
 
@@ -233,21 +235,26 @@ def mass_and_bias(
                 dmd += q[r] * md[r, c] * q[c]
                 dmdd += q[r] * md[r, c] * dq[c]
         ialpha = ia + dmd
-        # Rows of P = Mb Jb, accumulated straight into M = Jb' P (symmetric).
+        # The rows of P = Mb Jb for (u_x, u_y, alpha), then M += Jb' P row by row
+        # (contiguous, so the compiler vectorises it); the modal rows of P last.
+        P = ws.rows
         for c in range(n):
-            p_ux = m * U[0, c] - vd * A[c]
-            p_uy = m * U[1, c] + cx * A[c]
-            p_al = -vd * U[0, c] + cx * U[1, c] + ialpha * A[c]
-            if a0 <= c < a1:
-                p_uy += v[c]
-                p_al += w[c]
-            for r in range(n):
-                M[r, c] += U[0, r] * p_ux + U[1, r] * p_uy + A[r] * p_al
-            for r in range(a0, a1):
-                pd = v[r] * U[1, c] + w[r] * A[c]
-                if a0 <= c < a1:
-                    pd += md[r, c]
-                M[r, c] += pd
+            P[0, c] = m * U[0, c] - vd * A[c]
+            P[1, c] = m * U[1, c] + cx * A[c]
+            P[2, c] = -vd * U[0, c] + cx * U[1, c] + ialpha * A[c]
+        for c in range(a0, a1):
+            P[1, c] += v[c]
+            P[2, c] += w[c]
+        for r in range(n):
+            u0, u1, ar = U[0, r], U[1, r], A[r]
+            for c in range(n):
+                M[r, c] += u0 * P[0, c] + u1 * P[1, c] + ar * P[2, c]
+        for r in range(a0, a1):
+            vr, wr = v[r], w[r]
+            for c in range(n):
+                M[r, c] += vr * U[1, c] + wr * A[c]
+            for c in range(a0, a1):
+                M[r, c] += md[r, c]
         # Body-frame inertial force at qddot = 0.
         ad2 = ad * ad
         beta_ux = m * bx - ad2 * cx - 2.0 * ad * vdd
