@@ -15,6 +15,7 @@ LAYERS = {
     "modes": 1,
     "link": 1,
     "joints": 1,
+    "fuzzy": 1,
     "kernels": 2,
     "signals": 0,
     "trajectories": 1,
