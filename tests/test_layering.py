@@ -12,6 +12,7 @@ SRC = pathlib.Path(__file__).resolve().parents[1] / "src" / "flexarm"
 # Lower number = lower layer. A module may import only modules of its own layer or below.
 LAYERS = {
     "_validation": 0,
+    "_io": 0,
     "modes": 1,
     "link": 1,
     "joints": 1,

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -13,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import metrics as _m
+from ._io import atomic_path
 
 __all__ = ["SimulationResult"]
 
@@ -96,9 +96,7 @@ class SimulationResult:
     def rigid_tip(self) -> F64:
         """Where the rigid kinematics of the joint angles puts the tip, m, (K, 2)."""
         phi = np.cumsum(self.q[:, : self.n_links], axis=1)
-        return np.stack(
-            [np.cos(phi) @ self.link_lengths, np.sin(phi) @ self.link_lengths], axis=1
-        )
+        return np.stack([np.cos(phi) @ self.link_lengths, np.sin(phi) @ self.link_lengths], axis=1)
 
     @property
     def elastic_deflection(self) -> F64:
@@ -190,17 +188,8 @@ class SimulationResult:
             "info": self.info,
         }
         arrays = {k: getattr(self, k) for k in _ARRAYS}
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                np.savez_compressed(fh, meta=np.array(json.dumps(meta)), **arrays)
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; use the usual mode
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+            np.savez_compressed(fh, meta=np.array(json.dumps(meta)), **arrays)
         return path
 
     @classmethod

@@ -75,6 +75,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._io import atomic_path
 from .._validation import check_array, check_option, check_real
 from .kernels import KERNELS, kernel_profile, kernel_weight
 
@@ -634,7 +635,8 @@ class _KernelRegression:
         Parameters
         ----------
         path : str or os.PathLike
-            Destination file, written as given (no suffix is added).
+            Destination file, written as given (no suffix is added), atomically:
+            a temporary file beside it is renamed into place once complete.
         """
         self._check_fitted()
         if not isinstance(self.kernel_, str):
@@ -657,7 +659,7 @@ class _KernelRegression:
         else:
             n = self.n_samples_
             arrays.update(X=self._X[:n], y=self._y[:n], h=self._h[:n], scale=self._scale[:n])
-        with open(path, "wb") as f:
+        with atomic_path(path) as tmp, open(tmp, "wb") as f:
             np.savez(f, **arrays)
 
     @classmethod
