@@ -425,3 +425,13 @@ def test_mean_of_maxima_refused_for_gaussian_outputs():
     y = Variable("y", (0.0, 1.0), {"G": Gaussian(0.5, 0.1)})
     with pytest.raises(ValueError, match="'defuzzifier'"):
         FuzzySystem((_x(),), y, (Rule(("A",), "G"),), defuzzifier="mean-of-maxima")
+
+
+def test_evaluate_into_reuses_a_buffer_whatever_it_holds():
+    from flexarm.fuzzy import evaluate, evaluate_into, paper_system, workspace_size
+
+    compiled = paper_system().compiled()
+    rng = np.random.default_rng(7)
+    buf = np.full(workspace_size(compiled), np.nan)  # garbage must not leak into results
+    for x in rng.uniform(-6.0, 6.0, (50, 2)):
+        assert evaluate_into(compiled, x, buf) == evaluate(compiled, x)

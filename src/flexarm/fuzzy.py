@@ -108,9 +108,11 @@ __all__ = [
     "Triangle",
     "Variable",
     "evaluate",
+    "evaluate_into",
     "evaluate_many",
     "paper_system",
     "plot_surface",
+    "workspace_size",
 ]
 
 AND_OPERATORS = ("min", "product")
@@ -802,6 +804,18 @@ def _insertion_sort(v: Any, start: int, stop: int) -> None:
 
 
 @nb.njit(cache=True, nogil=True)
+def workspace_size(system: CompiledFuzzySystem) -> int:
+    """Length of the scratch buffer :func:`evaluate_into` needs for ``system``."""
+    n_terms = system.term_type.shape[0]
+    n_rules = system.rule_ante.shape[0]
+    n_out = system.out_par.shape[0]
+    cap = n_rules if system.ops[2] == 1 else n_out
+    n1 = 2 + 6 * cap
+    n_cross = (n1 - 1) * (cap * (cap - 1) // 2 if system.ops[2] == 0 else 1)
+    return int(n_terms + 7 * cap + n1 + n_cross)
+
+
+@nb.njit(cache=True, nogil=True)
 def evaluate(system: CompiledFuzzySystem, x: FloatArray) -> float:
     """Compiled centroid output of a packed system at one input vector.
 
@@ -817,9 +831,15 @@ def evaluate(system: CompiledFuzzySystem, x: FloatArray) -> float:
     float
         Equal (to rounding) to :meth:`FuzzySystem.__call__` at ``x``; the
         system's default when no rule fires, NaN for non-finite inputs.
-        Callable from other Numba-compiled code (about 1 µs for the paper's
-        system).
+        Allocates its scratch; inside a loop prefer :func:`evaluate_into`.
     """
+    return evaluate_into(system, x, np.empty(workspace_size(system)))
+
+
+@nb.njit(cache=True, nogil=True)
+def evaluate_into(system: CompiledFuzzySystem, x: FloatArray, buf: FloatArray) -> float:
+    """:func:`evaluate` with caller-owned scratch ``buf`` of length
+    :func:`workspace_size` (allocation-free: what a simulation loop calls)."""
     and_op = system.ops[0]
     imp = system.ops[1]
     agg = system.ops[2]
@@ -834,10 +854,7 @@ def evaluate(system: CompiledFuzzySystem, x: FloatArray) -> float:
     n_rules = system.rule_ante.shape[0]
     n_out = system.out_par.shape[0]
     cap = n_rules if agg == 1 else n_out
-    n1 = 2 + 6 * cap
-    n_cross = (n1 - 1) * (cap * (cap - 1) // 2 if agg == 0 else 1)
     # One workspace: input memberships, implied sets (params, levels), breakpoints.
-    buf = np.empty(n_terms + 7 * cap + n1 + n_cross)
     mu_in = buf[:n_terms]
     sp = buf[n_terms : n_terms + 4 * cap].reshape((cap, 4))
     sw = buf[n_terms + 4 * cap : n_terms + 5 * cap]
@@ -958,8 +975,9 @@ def evaluate(system: CompiledFuzzySystem, x: FloatArray) -> float:
 def evaluate_many(system: CompiledFuzzySystem, x: FloatArray) -> FloatArray:
     """:func:`evaluate` on each row of ``x`` (n, n_in); returns (n,)."""
     out = np.empty(x.shape[0])
+    buf = np.empty(workspace_size(system))
     for i in range(x.shape[0]):
-        out[i] = evaluate(system, x[i])
+        out[i] = evaluate_into(system, x[i], buf)
     return out
 
 
