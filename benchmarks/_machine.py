@@ -45,3 +45,18 @@ def machine_info(**peers: Any) -> dict[str, Any]:
         info[name] = None if module is None else module.__version__
     info["OPENBLAS_NUM_THREADS"] = os.environ.get("OPENBLAS_NUM_THREADS")
     return info
+
+
+def print_machine(machine: dict[str, Any], peer: str, label: str | None = None) -> None:
+    """Print the header every report starts with: machine, versions (``peer`` is the
+    key of the peer module in ``machine``, shown as ``label``) and load averages."""
+    m = machine
+    print()
+    print(f"{m['date']}  {m['cpu']} ({m['cpus']} CPUs)  {m['platform']}")
+    print(
+        f"python {m['python']}  numpy {m['numpy']}  scipy {m['scipy']}  numba {m['numba']}  "
+        f"flexarm {m['flexarm']}  {label or peer} {m.get(peer) or 'not installed'}"
+    )
+    la0 = ", ".join(f"{x:.2f}" for x in m["loadavg_at_start"])
+    la1 = ", ".join(f"{x:.2f}" for x in m.get("loadavg_at_end", m["loadavg_at_start"]))
+    print(f"load average at start {la0}; at end {la1}")

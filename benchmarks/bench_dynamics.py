@@ -51,7 +51,7 @@ from typing import Any
 import numba as nb
 import numpy as np
 
-from _machine import machine_info
+from _machine import machine_info, print_machine
 from flexarm import FlexibleArm, Link, MakkarFriction, NonlinearJoint, kernels
 
 N_STATES = 1024  # states cycled by the compiled driver (power of two)
@@ -291,15 +291,7 @@ def _fmt(ns: float) -> str:
 
 def print_report(out: dict[str, Any]) -> None:
     m = out["machine"]
-    print()
-    print(f"{m['date']}  {m['cpu']} ({m['cpus']} CPUs)  {m['platform']}")
-    print(
-        f"python {m['python']}  numpy {m['numpy']}  numba {m['numba']}  "
-        f"flexarm {m['flexarm']}  pinocchio {m['pinocchio'] or 'not installed'}"
-    )
-    la0 = ", ".join(f"{x:.2f}" for x in m["loadavg_at_start"])
-    la1 = ", ".join(f"{x:.2f}" for x in m["loadavg_at_end"])
-    print(f"load average at start {la0}; at end {la1}")
+    print_machine(m, "pinocchio")
     s = out["settings"]
     print(
         f"calls per batch: compiled loop {s['calls_compiled_loop']}, Python "

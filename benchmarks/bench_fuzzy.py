@@ -55,7 +55,7 @@ from typing import Any
 import numba as nb
 import numpy as np
 
-from _machine import machine_info
+from _machine import machine_info, print_machine
 from flexarm.fuzzy import FuzzySystem, evaluate, evaluate_many, paper_system
 
 N_INPUTS = 1024  # input rows cycled by the compiled driver (power of two)
@@ -267,15 +267,7 @@ def _rate(per_s: float) -> str:
 
 def print_report(out: dict[str, Any]) -> None:
     m = out["machine"]
-    print()
-    print(f"{m['date']}  {m['cpu']} ({m['cpus']} CPUs)  {m['platform']}")
-    print(
-        f"python {m['python']}  numpy {m['numpy']}  numba {m['numba']}  "
-        f"flexarm {m['flexarm']}  scikit-fuzzy {m['skfuzzy'] or 'not installed'}"
-    )
-    la0 = ", ".join(f"{x:.2f}" for x in m["loadavg_at_start"])
-    la1 = ", ".join(f"{x:.2f}" for x in m["loadavg_at_end"])
-    print(f"load average at start {la0}; at end {la1}")
+    print_machine(m, "skfuzzy", "scikit-fuzzy")
     s = out["settings"]
     print(
         f"evaluations per batch: compiled loop {s['calls_compiled_loop']}, evaluate_many "

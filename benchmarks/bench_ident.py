@@ -65,7 +65,7 @@ from typing import Any
 
 import numpy as np
 
-from _machine import machine_info
+from _machine import machine_info, print_machine
 from flexarm.ident import NadarayaWatson, SemiRecursiveKernelRegression
 
 SEED = 20261122
@@ -253,15 +253,7 @@ def _fmt(s: float) -> str:
 def print_report(out: dict[str, Any]) -> None:
     m = out["machine"]
     s = out["settings"]
-    print()
-    print(f"{m['date']}  {m['cpu']} ({m['cpus']} CPUs)  {m['platform']}")
-    print(
-        f"python {m['python']}  numpy {m['numpy']}  numba {m['numba']}  "
-        f"flexarm {m['flexarm']}  statsmodels {m['statsmodels'] or 'not installed'}"
-    )
-    la0 = ", ".join(f"{x:.2f}" for x in m["loadavg_at_start"])
-    la1 = ", ".join(f"{x:.2f}" for x in m["loadavg_at_end"])
-    print(f"load average at start {la0}; at end {la1}")
+    print_machine(m, "statsmodels")
     print(
         f"X ~ U[0, 1], y = sin(2 pi X) + {NOISE} N(0, 1), seed {s['seed']}; {s['grid_points']}-"
         f"point grid on [0, 1]; h = {s['bandwidth']}, semi-recursive decay {s['decay']}; "

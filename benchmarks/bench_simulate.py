@@ -86,7 +86,7 @@ import numba as nb
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from _machine import machine_info
+from _machine import machine_info, print_machine
 from flexarm import FlexibleArm, Link
 from flexarm.controllers import CompiledController, JacobianTransposePD
 from flexarm.simulate import SimulationError, simulate
@@ -465,15 +465,7 @@ def _ns(ns: float) -> str:
 
 def print_report(out: dict[str, Any]) -> None:
     m = out["machine"]
-    print()
-    print(f"{m['date']}  {m['cpu']} ({m['cpus']} CPUs)  {m['platform']}")
-    print(
-        f"python {m['python']}  numpy {m['numpy']}  scipy {m['scipy']}  numba {m['numba']}  "
-        f"flexarm {m['flexarm']}  mujoco {m['mujoco'] or 'not installed'}"
-    )
-    la0 = ", ".join(f"{x:.2f}" for x in m["loadavg_at_start"])
-    la1 = ", ".join(f"{x:.2f}" for x in m["loadavg_at_end"])
-    print(f"load average at start {la0}; at end {la1}")
+    print_machine(m, "mujoco")
     s = out["settings"]
     print(
         f"flexarm: {s['repeat']} timed runs each (after a warm-up); SciPy loop: "
