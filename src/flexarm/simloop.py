@@ -29,7 +29,7 @@ from .kernels import (
     point_kinematics,
 )
 
-__all__ = ["LoopState", "SensorArrays", "run"]
+__all__ = ["LoopState", "SensorArrays", "run", "sense"]
 
 F64 = NDArray[np.float64]
 
@@ -90,7 +90,7 @@ def _collocated(q: F64, dq: F64, model: ArmArrays, i: int, n_links: int) -> tupl
 
 
 @njit_runtime_free(cache=True, nogil=True)
-def _sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> None:
+def sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> None:
     """The raw (true, undelayed) sensed signal."""
     n_links = model.link.shape[0]
     link = sensor.link[0]
@@ -207,7 +207,7 @@ def run(
     joint_sensor = sensor.link[0] < 0
     for k in range(k0, k1):
         # ---- measure: the delayed sensed signal, then noise and quantisation
-        _sense(q, dq, model, sensor, raw)
+        sense(q, dq, model, sensor, raw)
         cur = state.cursor[0]
         if n_buf > 1:
             src = cur - (n_buf - 1)
@@ -298,7 +298,7 @@ def run(
         # ---- integrate to t_{k+1}
         for _ in range(substeps):
             if order > 0:  # Padé filter: x <- Ad x + Bd u over this substep
-                _sense(q, dq, model, sensor, raw)
+                sense(q, dq, model, sensor, raw)
                 for c in range(n_ch):
                     for j in range(order):
                         acc = sensor.pade_bd[j] * raw[c]
@@ -310,7 +310,7 @@ def run(
             _rk4(q, dq, tau, h, model, ws, state.scratch)
             state.cursor[0] += 1
             if n_buf > 1:
-                _sense(q, dq, model, sensor, raw)
+                sense(q, dq, model, sensor, raw)
                 slot = state.cursor[0] % n_buf
                 for c in range(n_ch):
                     state.buffer[slot, c] = raw[c]

@@ -390,26 +390,14 @@ def simulate(
 
 def _prime_delay_line(arm: Any, sensor: simloop.SensorArrays, state: simloop.LoopState) -> None:
     """Start the delay line at steady state on the initial sensed signal."""
-    raw = _sense_python(arm, sensor, state.q, state.dq)
+    raw = np.zeros(state.buffer.shape[1])
+    simloop.sense(state.q, state.dq, arm.arrays, sensor, raw)
     state.buffer[:] = raw
     order = sensor.pade_ad.shape[0]
     if order:
         # discrete steady state: x = (I - Ad)^-1 Bd u
         gain = np.linalg.solve(np.eye(order) - sensor.pade_ad, sensor.pade_bd)
         state.pade_x[:] = np.outer(raw, gain)
-
-
-def _sense_python(
-    arm: Any, sensor: simloop.SensorArrays, q: NDArray[np.float64], dq: NDArray[np.float64]
-) -> NDArray[np.float64]:
-    link = int(sensor.link[0])
-    if link < 0:
-        idx = arm.actuated_slice
-        angles: NDArray[np.float64] = np.r_[q[idx], dq[idx]]
-        return angles
-    signal: NDArray[np.float64] = np.zeros(4)
-    kernels.point_kinematics(q, dq, arm.arrays, link, float(sensor.distance[0]), sensor.phi, signal)
-    return signal
 
 
 def _run_chunks(
