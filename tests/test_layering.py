@@ -31,6 +31,9 @@ LAYERS = {
     "simulate": 5,
     "scenario": 6,
     "cli": 9,
+    "cli._common": 8,
+    "cli.modes": 9,
+    "cli.simulate": 9,
     "__main__": 9,
     "__init__": 9,
     # flexarm.ident: data -> estimators; needs only _validation.

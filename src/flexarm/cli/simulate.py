@@ -1,0 +1,301 @@
+"""``flexarm simulate``: one closed-loop run from a scenario file and options."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..delays import DELAY_METHODS
+from ..results import SimulationResult
+from ..scenario import (
+    CONTROLLERS,
+    DELAY_MODELS,
+    SHAPER_MODES,
+    SHAPERS,
+    Scenario,
+    ScenarioError,
+    apply_overrides,
+    read_scenario,
+)
+from ..sensors import PointSensor, Sensor, parse_sensor
+from ..simulate import SimulationError, simulate
+from ._common import EXIT_FAILURE, UsageError, check_out, json_ready, output_directory
+
+__all__ = ["OUTPUT_FILES", "add_parser"]
+
+OUTPUT_FILES = ("result.npz", "summary.json", "timeseries.csv", "tracking.png")
+
+# which command-line option set which scenario key (for error messages)
+_OPTION_OF_KEY = {
+    "controller.kind": "--controller",
+    "sensor.kind": "--sensor",
+    "sensor.link": "--sensor",
+    "sensor.distance": "--sensor",
+    "delay.delay": "--delay",
+    "delay.method": "--delay-method",
+    "delay.order": "--pade-order",
+    "delay.reference": "--delay-reference",
+    "shaper.kind": "--shaper",
+    "shaper.modes": "--shaper-modes",
+    "simulation.duration": "--duration",
+    "simulation.dt": "--dt",
+    "simulation.substeps": "--substeps",
+    "simulation.seed": "--seed",
+}
+
+
+def _sensor_option(text: str) -> Sensor:
+    try:
+        return parse_sensor(text)
+    except (TypeError, ValueError) as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _delay_option(text: str) -> str | float:
+    if text in DELAY_MODELS:
+        return text
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"must be a number of seconds (>= 0), 'seed' or 'dispersive'. Got {text!r} instead."
+        ) from None
+
+
+def _overrides(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
+    """The options given on the command line, in the scenario schema."""
+    out: dict[str, dict[str, Any]] = {}
+
+    def put(key: str, value: Any) -> None:
+        if value is not None:
+            section, name = key.split(".")
+            out.setdefault(section, {})[name] = value
+
+    put("controller.kind", args.controller)
+    sensor: Sensor | None = args.sensor
+    if sensor is not None:
+        put("sensor.kind", sensor.name)
+        if isinstance(sensor, PointSensor):
+            put("sensor.link", sensor.link)
+            put("sensor.distance", sensor.distance)
+    put("delay.delay", args.delay)
+    put("delay.method", args.delay_method)
+    put("delay.order", args.pade_order)
+    put("delay.reference", args.delay_reference)
+    put("shaper.kind", args.shaper)
+    put("shaper.modes", args.shaper_modes)
+    put("simulation.duration", args.duration)
+    put("simulation.dt", args.dt)
+    put("simulation.substeps", args.substeps)
+    put("simulation.seed", args.seed)
+    return out
+
+
+def _build_scenario(args: argparse.Namespace) -> Scenario:
+    """The scenario file (if any) with the command-line options over it."""
+    overrides = _overrides(args)
+    given = {f"{s}.{k}" for s, table in overrides.items() for k in table}
+    try:
+        data = read_scenario(args.scenario) if args.scenario is not None else {}
+        source = args.scenario if args.scenario is not None else "command line"
+        return Scenario.from_dict(apply_overrides(data, overrides), source=source)
+    except ScenarioError as exc:
+        if exc.key in given:
+            option = _OPTION_OF_KEY[exc.key]
+            raise UsageError(f"flexarm simulate: error: argument {option}: {exc.reason}") from None
+        raise UsageError(f"flexarm simulate: error: {exc}") from None
+
+
+def _write_outputs(out: Path, result: SimulationResult, summary: dict[str, Any]) -> None:
+    """Write every file into a fresh directory beside ``out``, then rename it into place."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    with output_directory(out) as tmp:
+        result.save(tmp / "result.npz")
+        (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        header, table = result.table()
+        np.savetxt(
+            tmp / "timeseries.csv",
+            table,
+            fmt="%.10g",
+            delimiter=",",
+            header=",".join(header),
+            comments="",
+        )
+        fig = Figure(figsize=(10, 6.5), layout="constrained")
+        FigureCanvasAgg(fig)
+        result.plot(fig=fig)
+        fig.savefig(tmp / "tracking.png", dpi=100)
+
+
+def _format_summary(summary: dict[str, Any]) -> str:
+    s = summary["settings"]
+    sim = s["simulation"]
+    delay = s["delay"]
+    delay_text = (
+        "none" if delay["delay_s"] == 0 else f"{delay['delay_s']:.6g} s ({delay['method']})"
+    )
+    lines = [
+        f"flexarm simulate: {len(s['arm']['links'])}-link arm, "
+        f"controller {s['controller']['kind']}, "
+        f"sensor {s['sensor']['spec']}, delay {delay_text}, shaper {s['shaper']['kind']}, "
+        f"{s['trajectory']['kind']} trajectory",
+        f"  simulated {summary['sim_time_s']:g} s at dt = {sim['dt']:g} s "
+        f"({sim['substeps']} substep(s)) in {summary['wall_time_s']:.3g} s",
+    ]
+
+    def num(x: Any, unit: str) -> str:
+        return "n/a" if x is None else f"{x:.6g} {unit}"
+
+    known = [x for x in summary["corner_errors_m"] if x is not None]
+    corners = (
+        ", ".join("n/a" if x is None else f"{x:.4g}" for x in summary["corner_errors_m"]) + " m"
+        if known
+        else "n/a"
+    )
+    rows = [
+        ("rms error", num(summary["rms_error_m"], "m")),
+        ("max error", num(summary["max_error_m"], "m")),
+        ("corner errors", corners),
+        ("residual vibration", num(summary["residual_vibration_m"], "m")),
+        ("settling time", num(summary["settling_time_s"], "s")),
+        ("control effort", num(summary["control_effort_N2m2s"], "N^2 m^2 s")),
+        ("max torque", num(summary["max_torque_Nm"], "N m")),
+    ]
+    lines += [f"  {name:<20}{value}" for name, value in rows]
+    return "\n".join(lines)
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    scenario = _build_scenario(args)
+    out = Path(os.path.abspath(args.out)) if args.out is not None else None
+    if out is not None:
+        check_out(out, "flexarm simulate")
+    try:
+        result = simulate(scenario.arm, **scenario.simulate_kwargs(), progress=None)
+    except (TypeError, ValueError) as exc:  # e.g. a path outside the workspace
+        raise UsageError(f"flexarm simulate: error: {scenario.source}: {exc}") from None
+    except SimulationError as exc:
+        print(
+            f"flexarm simulate: the simulation diverged at t = {exc.time:.6g} s (state "
+            "non-finite, overflowing or a tip deflection beyond max_deflection); nothing written",
+            file=sys.stderr,
+        )
+        return EXIT_FAILURE
+    summary = json_ready(
+        {
+            "status": "ok",
+            **result.metrics(),
+            "settings": scenario.description,
+            "run": result.info,
+            "out": args.out,
+            "files": [] if out is None else list(OUTPUT_FILES),
+        }
+    )
+    if out is not None:
+        try:
+            _write_outputs(out, result, summary)
+        except OSError as exc:
+            print(f"flexarm simulate: error: cannot write {str(out)!r}: {exc}", file=sys.stderr)
+            return EXIT_FAILURE
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print(_format_summary(summary))
+        if out is not None:
+            print(f"  results in {out}: {', '.join(OUTPUT_FILES)}")
+    return 0
+
+
+_SIMULATE_DESCRIPTION = """\
+Simulate the closed loop: by default the paper's arm (two 4.5 m links, one mode each)
+tracking the default square (20 s) under the paper's Jacobian-transpose PD gains with
+joint encoders. --scenario FILE.toml sets anything (arm, trajectory, sensor, controller,
+delay, shaper, simulation; schema in flexarm.scenario, example in
+examples/paper_square.toml); options given on the command line override the file.
+"""
+
+_SIMULATE_EPILOG = """\
+shaper: designed for the first clamped frequency of the first link (--shaper-modes
+first, the default), or for every link's first clamped frequency, one shaper per link
+convolved (--shaper-modes all).
+
+delay: 'seed' and 'dispersive' compute the bending-wave travel time over the path
+along the links from the base joint to the sensed point (0 for joint encoders, 9 m
+for the paper arm's tip), at the seed's speed (41 783 m/s) or at the dispersive group
+speed of the first link at its first clamped frequency.
+
+output: with --out DIR, nothing is written unless the run succeeds; then DIR (new, or
+an empty directory) receives result.npz (SimulationResult.load), summary.json (what
+--json prints), timeseries.csv and tracking.png, all at once (written beside it and
+renamed into place). Metrics that are undefined (corners after a short run's end) are
+null in JSON.
+
+exit status: 0 success; 1 the simulation diverged (one line on stderr with the time;
+nothing is written: run it from Python to get SimulationError.result, the partial
+result) or the results could not be written; 2 bad input (one line on stderr).
+"""
+
+
+def add_parser(sub: Any) -> None:
+    """Add ``simulate`` to the subcommands ``sub``."""
+    sim = sub.add_parser(
+        "simulate",
+        help="simulate the closed loop (the paper's arm on the square by default)",
+        description=_SIMULATE_DESCRIPTION,
+        epilog=_SIMULATE_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    sim.add_argument("--scenario", metavar="FILE.toml", help="scenario file (TOML)")
+    sim.add_argument(
+        "--controller",
+        choices=CONTROLLERS,
+        help="pd: the paper's Jacobian-transpose PD gains from the first link's first "
+        "frequency (default); jt-pd: JacobianTransposePD with the scenario's kp, kd; "
+        "joint-pd: JointPD",
+    )
+    sim.add_argument(
+        "--sensor",
+        type=_sensor_option,
+        metavar="joint|tip|point:LINK:DISTANCE",
+        help="joint encoders (default), the end effector, or a point DISTANCE m along link "
+        "LINK (0-based: point:1:0.5 is 0.5 m from the elbow)",
+    )
+    sim.add_argument(
+        "--delay",
+        type=_delay_option,
+        metavar="SECONDS|seed|dispersive",
+        help="transport delay of the sensed signal (default 0; see below)",
+    )
+    sim.add_argument("--delay-method", choices=DELAY_METHODS, help="default exact")
+    sim.add_argument("--pade-order", type=int, metavar="N", help="Pade order (default 2)")
+    sim.add_argument(
+        "--delay-reference",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="delay the command fed to the control law by the same amount",
+    )
+    sim.add_argument("--shaper", choices=SHAPERS, help="input shaper (default none)")
+    sim.add_argument("--shaper-modes", choices=SHAPER_MODES, help="default first (see below)")
+    sim.add_argument(
+        "--duration", type=float, metavar="SECONDS", help="default: the trajectory's duration"
+    )
+    sim.add_argument(
+        "--dt",
+        type=float,
+        metavar="SECONDS",
+        help="control period (default 2e-4 s; the hubless paper arm under the paper's gains "
+        "is sampled-data unstable at 1 ms)",
+    )
+    sim.add_argument("--substeps", type=int, metavar="N", help="RK4 steps per period (default 1)")
+    sim.add_argument("--seed", type=int, metavar="N", help="seed of the sensor noise")
+    sim.add_argument("--out", metavar="DIR", help="write the results into DIR (see below)")
+    sim.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
+    sim.set_defaults(func=_cmd_simulate)
