@@ -26,20 +26,26 @@ LAYERS = {
     "arm": 3,
     "sensors": 4,
     "controllers": 4,
+    "adaptive": 4,
     "results": 4,
     "simloop": 4,
     "simulate": 5,
     "scenario": 6,
+    "reproduce": 7,
     "cli": 9,
     "cli._common": 8,
     "cli.modes": 9,
     "cli.simulate": 9,
+    "cli.reproduce": 9,
     "__main__": 9,
     "__init__": 9,
     # flexarm.ident: data -> estimators; needs only _validation.
     "ident": 2,
     "ident.kernels": 1,
     "ident.regression": 2,
+    "ident.systems": 1,
+    "ident.hammerstein": 2,
+    "joint_identification": 6,
 }
 
 

@@ -2,13 +2,19 @@
 
 from __future__ import annotations
 
+import math
 import os
+import secrets
+import shutil
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
-__all__ = ["atomic_path"]
+import numpy as np
+
+__all__ = ["atomic_path", "json_ready", "output_directory"]
 
 
 @contextmanager
@@ -32,3 +38,41 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
+
+
+@contextmanager
+def output_directory(out: Path) -> Iterator[Path]:
+    """Yield a fresh directory beside ``out``; on success rename it to ``out``.
+
+    Everything written into the yielded directory appears under ``out`` at once
+    (``out`` may be an empty directory, which is replaced); on any error the
+    temporary directory is removed and ``out`` is left as it was.
+    """
+    while True:
+        tmp = out.parent / f".{out.name}.{secrets.token_hex(4)}.tmp"
+        try:
+            tmp.mkdir()
+            break
+        except FileExistsError:  # pragma: no cover - 32 random bits
+            continue
+    try:
+        yield tmp
+        os.replace(tmp, out)  # atomic; replaces an empty directory
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def json_ready(value: Any) -> Any:
+    """Strict JSON: NaN and infinities become null; tuples and arrays, lists."""
+    if isinstance(value, Mapping):
+        return {str(k): json_ready(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_ready(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return json_ready(value.tolist())
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value

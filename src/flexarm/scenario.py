@@ -55,7 +55,10 @@ builds, with the same names and SI units::
                               # "jt-pd": JacobianTransposePD(kp, kd), N/m and N s/m,
                               #   scalar, [kx, ky] or 2x2;
                               # "joint-pd": JointPD(kp, kd), N m/rad and N m s/rad,
-                              #   scalar or one per link
+                              #   scalar or one per link;
+                              # "fuzzy": the paper's gains (zeta) adapted by the
+                              #   paper's fuzzy system, FuzzyAdaptiveJTPD (keys:
+                              #   zeta = 0.707, ks = 1.0, law = "scaled" | "damping")
 
     [delay]                   # transport delay of the sensed signal
     delay = 0.0               # s, or "seed" / "dispersive" (below)
@@ -122,6 +125,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from ._validation import check_array, check_int, check_option, check_real
+from .adaptive import FuzzyAdaptiveJTPD
 from .arm import FlexibleArm
 from .controllers import Controller, JacobianTransposePD, JointPD
 from .delays import (
@@ -163,7 +167,7 @@ TRAJECTORIES: dict[str, type] = {
     "waypoints": Waypoints,
 }
 SENSORS: dict[str, type] = {"joint": JointSensor, "tip": TipSensor, "point": PointSensor}
-CONTROLLERS = ("pd", "jt-pd", "joint-pd")
+CONTROLLERS = ("pd", "jt-pd", "joint-pd", "fuzzy")
 SHAPERS = ("none", "zv", "zvd", "ei")
 SHAPER_MODES = ("first", "all")
 JOINT_KINDS = ("rigid", "linear", "nonlinear")
@@ -648,6 +652,15 @@ def _controller(
         with r.library("controller", params):
             controller = JacobianTransposePD.from_arm(arm, zeta)
         description["zeta"] = zeta
+    elif kind == "fuzzy":
+        params = {k: v for k, v in t.items() if k != "kind"}
+        r.keys(params, "controller", ("zeta", "ks", "law"), "kind = 'fuzzy'")
+        zeta = params.get("zeta", 0.707)
+        ks = params.get("ks", 1.0)
+        law = params.get("law", "scaled")
+        with r.library("controller", params):
+            controller = FuzzyAdaptiveJTPD.from_arm(arm, zeta, ks=ks, law=law)
+        description.update(zeta=zeta, ks=controller.ks, law=controller.law)
     else:
         cls = JacobianTransposePD if kind == "jt-pd" else JointPD
         controller = r.build(cls, t, "controller", kind=True)

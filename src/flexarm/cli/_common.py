@@ -3,16 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import math
-import os
-import secrets
-import shutil
-from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import NoReturn
 
-import numpy as np
+from .._io import json_ready, output_directory
 
 __all__ = [
     "EXIT_FAILURE",
@@ -54,41 +48,3 @@ def check_out(out: Path, prog: str) -> None:
         raise UsageError(
             f"{prog}: error: argument --out: the parent directory {str(parent)!r} does not exist"
         )
-
-
-def json_ready(value: Any) -> Any:
-    """Strict JSON: NaN and infinities become null; tuples and arrays, lists."""
-    if isinstance(value, Mapping):
-        return {str(k): json_ready(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [json_ready(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return json_ready(value.tolist())
-    if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
-
-
-@contextmanager
-def output_directory(out: Path) -> Iterator[Path]:
-    """Yield a fresh directory beside ``out``; on success rename it to ``out``.
-
-    Everything written into the yielded directory appears under ``out`` at once
-    (``out`` may be an empty directory, which is replaced); on any error the
-    temporary directory is removed and ``out`` is left as it was.
-    """
-    while True:
-        tmp = out.parent / f".{out.name}.{secrets.token_hex(4)}.tmp"
-        try:
-            tmp.mkdir()
-            break
-        except FileExistsError:  # pragma: no cover - 32 random bits
-            continue
-    try:
-        yield tmp
-        os.replace(tmp, out)  # atomic; replaces an empty directory
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise

@@ -259,7 +259,8 @@ def add_parser(sub: Any) -> None:
         choices=CONTROLLERS,
         help="pd: the paper's Jacobian-transpose PD gains from the first link's first "
         "frequency (default); jt-pd: JacobianTransposePD with the scenario's kp, kd; "
-        "joint-pd: JointPD",
+        "joint-pd: JointPD; fuzzy: the paper's gains with the fuzzy adaptive law "
+        "(FuzzyAdaptiveJTPD; set ks and law in the scenario file)",
     )
     sim.add_argument(
         "--sensor",
