@@ -46,6 +46,9 @@ LAYERS = {
     "ident.systems": 1,
     "ident.hammerstein": 2,
     "joint_identification": 6,
+    "ident.systems": 1,
+    "ident.hammerstein": 2,
+    "joint_identification": 6,
 }
 
 

@@ -6,12 +6,31 @@ state, and :mod:`flexarm.ident.kernels` for the kernels.
 
 from __future__ import annotations
 
+from .hammerstein import (
+    ARMAFit,
+    HammersteinIdentifier,
+    arma_from_impulse_response,
+    fit_percent,
+    two_point_normalisation,
+)
 from .kernels import KERNELS, evaluate_kernel
 from .regression import (
     NadarayaWatson,
     NotFittedError,
     RecursiveKernelRegression,
     SemiRecursiveKernelRegression,
+)
+from .systems import (
+    ARMA,
+    EXAMPLE_ARMA,
+    Cubic,
+    DeadZone,
+    HardLimiter,
+    PiecewiseLinear,
+    Quantizer,
+    Saturation,
+    Sign,
+    simulate_hammerstein,
 )
 
 __all__ = [
@@ -21,4 +40,21 @@ __all__ = [
     "RecursiveKernelRegression",
     "SemiRecursiveKernelRegression",
     "evaluate_kernel",
+]
+__all__ += [  # Hammerstein systems and their identification (issue 7)
+    "ARMA",
+    "EXAMPLE_ARMA",
+    "ARMAFit",
+    "Cubic",
+    "DeadZone",
+    "HammersteinIdentifier",
+    "HardLimiter",
+    "PiecewiseLinear",
+    "Quantizer",
+    "Saturation",
+    "Sign",
+    "arma_from_impulse_response",
+    "fit_percent",
+    "simulate_hammerstein",
+    "two_point_normalisation",
 ]
