@@ -772,23 +772,23 @@ def _trap1(a: float, b: float, c: float, d: float, x: float) -> float:
 
 
 @nb.njit(cache=True, nogil=True)
-def _agg1(sp: Any, sw: Any, m: int, imp: int, agg: int, x: float) -> float:
+def _imp1(sp: Any, sw: Any, i: int, imp: int, x: float) -> float:
+    mu = _trap1(sp[i, 0], sp[i, 1], sp[i, 2], sp[i, 3], x)
+    v: float = min(mu, sw[i]) if imp == 0 else mu * sw[i]
+    return v
+
+
+@nb.njit(cache=True, nogil=True)
+def _linear_aggregate(left: Any, right: Any, m: int, agg: int, u: float) -> float:
+    """Max (agg 0) or bounded sum (agg 1) of ``m`` linear functions at ``u`` in [0, 1]."""
     acc = 0.0
     for i in range(m):
-        mu = _trap1(sp[i, 0], sp[i, 1], sp[i, 2], sp[i, 3], x)
-        v = min(mu, sw[i]) if imp == 0 else mu * sw[i]
+        v = left[i] + u * (right[i] - left[i])
         if agg == 0:
             acc = max(acc, v)
         else:
             acc += v
     return acc if agg == 0 else min(acc, 1.0)
-
-
-@nb.njit(cache=True, nogil=True)
-def _imp1(sp: Any, sw: Any, i: int, imp: int, x: float) -> float:
-    mu = _trap1(sp[i, 0], sp[i, 1], sp[i, 2], sp[i, 3], x)
-    v: float = min(mu, sw[i]) if imp == 0 else mu * sw[i]
-    return v
 
 
 @nb.njit(cache=True, nogil=True)
@@ -810,9 +810,9 @@ def workspace_size(system: CompiledFuzzySystem) -> int:
     n_rules = system.rule_ante.shape[0]
     n_out = system.out_par.shape[0]
     cap = n_rules if system.ops[2] == 1 else n_out
-    n1 = 2 + 6 * cap
-    n_cross = (n1 - 1) * (cap * (cap - 1) // 2 if system.ops[2] == 0 else 1)
-    return int(n_terms + 7 * cap + n1 + n_cross)
+    n1 = 2 + 6 * cap  # breakpoints of the implied sets
+    n_cross = cap * (cap - 1) // 2 if system.ops[2] == 0 else 1  # crossings on one piece
+    return int(n_terms + 7 * cap + n1 + n_cross + 2)
 
 
 @nb.njit(cache=True, nogil=True)
@@ -916,56 +916,61 @@ def evaluate_into(system: CompiledFuzzySystem, x: FloatArray, buf: FloatArray) -
                 pts[n] = min(max(d - sw[i] * (d - c), lo), hi)
                 n += 1
     _insertion_sort(pts, 0, n)
-    first = pts
-    # Crossings of implied sets (max) or of their sum with 1 (bounded sum).
-    n2 = n
-    for s in range(n - 1 if m > 1 else 0):
-        p0 = first[s]
-        h = first[s + 1] - p0
+    # On each piece between breakpoints every implied set is linear, so the
+    # aggregate is the max (or the bounded sum) of linear functions: linear
+    # between the crossings of any two of them (max) or of the sum with 1
+    # (bounded sum). Integrate it exactly, piece by piece, from the end values.
+    us = pts[n:]
+    area = 0.0
+    moment = 0.0
+    for s in range(n - 1):
+        p0 = pts[s]
+        h = pts[s + 1] - p0
         if h <= 0.0:
             continue
         x1 = p0 + h / 3.0
         x2 = p0 + 2.0 * h / 3.0
+        for i in range(m):  # end values of set i on this piece (extrapolated from thirds)
+            f1 = _imp1(sp, sw, i, imp, x1)
+            f2 = _imp1(sp, sw, i, imp, x2)
+            v1[i] = 2.0 * f1 - f2
+            v2[i] = 2.0 * f2 - f1
+        us[0] = 0.0
+        k_u = 1
         if agg == 0:
             for i in range(m):
-                v1[i] = _imp1(sp, sw, i, imp, x1)
-                v2[i] = _imp1(sp, sw, i, imp, x2)
-            for i in range(m):
                 for k in range(i + 1, m):
-                    g1 = v1[i] - v1[k]
-                    g2 = v2[i] - v2[k]
-                    dl = 2.0 * g1 - g2
-                    dr = 2.0 * g2 - g1
+                    dl = v1[i] - v1[k]
+                    dr = v2[i] - v2[k]
                     if dl * dr < 0.0:
-                        pts[n2] = min(max(p0 + h * dl / (dl - dr), lo), hi)
-                        n2 += 1
+                        us[k_u] = dl / (dl - dr)
+                        k_u += 1
         else:
-            s1 = -1.0
-            s2 = -1.0
+            sl = -1.0
+            sr = -1.0
             for i in range(m):
-                s1 += _imp1(sp, sw, i, imp, x1)
-                s2 += _imp1(sp, sw, i, imp, x2)
-            dl = 2.0 * s1 - s2
-            dr = 2.0 * s2 - s1
-            if dl * dr < 0.0:
-                pts[n2] = min(max(p0 + h * dl / (dl - dr), lo), hi)
-                n2 += 1
-    _insertion_sort(pts, n, n2)
-    final = pts
-    area = 0.0
-    moment = 0.0
-    for s in range(n2 - 1):
-        a = final[s]
-        b = final[s + 1]
-        h = b - a
-        if h <= 0.0:
-            continue
-        f1 = _agg1(sp, sw, m, imp, agg, a + h / 3.0)
-        f2 = _agg1(sp, sw, m, imp, agg, a + 2.0 * h / 3.0)
-        ml = max(2.0 * f1 - f2, 0.0)
-        mr = max(2.0 * f2 - f1, 0.0)
-        area += h * (ml + mr) / 2.0
-        moment += h / 6.0 * (a * (2.0 * ml + mr) + b * (ml + 2.0 * mr))
+                sl += v1[i]
+                sr += v2[i]
+            if sl * sr < 0.0:
+                us[k_u] = sl / (sl - sr)
+                k_u += 1
+        us[k_u] = 1.0
+        k_u += 1
+        _insertion_sort(us, 1, k_u - 1)
+        f_prev = _linear_aggregate(v1, v2, m, agg, 0.0)
+        for q in range(1, k_u):
+            u0 = us[q - 1]
+            u1 = us[q]
+            f_next = _linear_aggregate(v1, v2, m, agg, u1)
+            if u1 > u0:
+                a = p0 + h * u0
+                b = p0 + h * u1
+                w = b - a
+                ml = max(f_prev, 0.0)
+                mr = max(f_next, 0.0)
+                area += w * (ml + mr) / 2.0
+                moment += w / 6.0 * (a * (2.0 * ml + mr) + b * (ml + 2.0 * mr))
+            f_prev = f_next
     if not area > 0.0:
         return default
     return moment / area
