@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import inspect
+
 import numpy as np
 import pytest
 
@@ -288,6 +290,7 @@ def test_get_set_params_and_repr():
         "bandwidth": 0.5,
         "decay": 0.2,
         "grid": None,
+        "binned": None,
     }
     assert repr(est) == "SemiRecursiveKernelRegression(bandwidth=0.5, kernel='uniform')"
     assert est.set_params(decay=0.1) is est and est.decay == 0.1
@@ -400,3 +403,138 @@ def test_bad_input_after_fit():
         g.predict([0.0, 0.25])
     with pytest.raises(ValueError, match=r"'kernel'.*finite"):
         SemiRecursiveKernelRegression(kernel=lambda u: np.full(len(u), np.nan)).fit(X1, Y1)
+
+
+# ----------------------------------------------------------------------- decay = 0 vs statsmodels
+
+
+def test_decay_zero_equals_statsmodels_kernelreg():
+    kr = pytest.importorskip(
+        "statsmodels.nonparametric.kernel_regression",
+        reason="statsmodels is the oracle here (pip install -e '.[test]')",
+    )
+    X, y = data(400, seed=21)
+    x = np.linspace(-0.1, 1.1, 57)
+    kw = {"var_type": "c", "reg_type": "lc", "bw": [0.08]}
+    if "rng" in inspect.signature(kr.KernelReg).parameters:  # silences a FutureWarning
+        kw["rng"] = np.random.default_rng(0)  # (used only by bandwidth search, not here)
+    ref = np.asarray(kr.KernelReg(y, X, **kw).fit(x)[0])
+    assert kr.KernelReg(y, X, **kw).ckertype == "gaussian"
+    nw = NadarayaWatson(bandwidth=0.08).fit(X, y).predict(x)
+    semi = SemiRecursiveKernelRegression(bandwidth=0.08, decay=0.0, grid=x).fit(X, y).predict(x)
+    np.testing.assert_allclose(nw, ref, rtol=1e-12, atol=1e-13)
+    np.testing.assert_allclose(semi, ref, rtol=1e-12, atol=1e-13)
+
+
+# ----------------------------------------------------------------------------- binned mode
+
+
+def direct_sums(x, X, y, bandwidth, decay, kernel, recursive=False):
+    """Exact ``N(x)``, ``D(x)`` with NumPy (the binned mode's reference)."""
+    i = np.arange(1, len(X) + 1, dtype=float)
+    h = bandwidth * i**-decay
+    K = PROFILES[kernel]((x[:, None] - X[None, :]) / h[None, :])
+    if recursive:
+        K = K / h[None, :]
+    return K @ y, K.sum(axis=1)
+
+
+BINNED_CLASSES = {
+    "semi": (SemiRecursiveKernelRegression, {"decay": 0.2}, 0.2, False),
+    "recursive": (RecursiveKernelRegression, {"decay": 0.25}, 0.25, True),
+    "nw": (NadarayaWatson, {}, 0.0, False),
+}
+
+
+@pytest.mark.parametrize("which", sorted(BINNED_CLASSES))
+@pytest.mark.parametrize("kernel", ["gaussian", "epanechnikov", "triangular"])
+@pytest.mark.parametrize("r", [0.3, 0.1])
+def test_binned_error_within_stated_bound(which, kernel, r):
+    cls, kw, decay, recursive = BINNED_CLASSES[which]
+    X, y = data(20000, seed=31)
+    y = y + 1.5  # a mean far from 0: A and S both matter
+    x = np.linspace(-0.2, 1.2, 97)
+    est = cls(kernel, 0.3, grid=x, binned=r, **kw).fit(X, y)
+    N, D = direct_sums(x, X, y, 0.3, decay, kernel, recursive)
+    eN, eD = est.sum_error_bounds(x)
+    # the oracle's own rounding (NumPy sums of n terms): n eps times the sum of |terms|
+    _, D_abs = direct_sums(x, X, y, 0.3, decay, kernel, recursive)
+    N_abs = direct_sums(x, X, np.abs(y), 0.3, decay, kernel, recursive)[0]
+    oracle = len(X) * 2.0**-52
+    dN = np.abs(est.numerator_ - N)
+    dD = np.abs(est.denominator_ - D)
+    assert np.all(dN <= eN + oracle * N_abs) and np.all(dD <= eD + oracle * D_abs)
+    assert dD.max() > 1e-6 * D.max()  # the binning did happen (not all blocks exact)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        m = N / D
+    bound = est.error_bound(x)
+    ok = np.isfinite(m) & np.isfinite(bound)
+    assert ok.sum() > 60
+    assert np.all(np.abs(est.predict(x)[ok] - m[ok]) <= bound[ok])
+    # the stated per-weight bound, recomputed from the formulas of flexarm.ident.binning
+    m1 = {"gaussian": 2 / np.e, "epanechnikov": 1.5, "triangular": 1.0}[kernel]
+    interp = {"gaussian": r**2 / 8, "epanechnikov": 3 * r**2 / 16 + 3 * r / 8}.get(kernel, r / 2)
+    tau = np.exp(-81 / (2 * (1 + r**2))) + 1e-12 if kernel == "gaussian" else 0.0
+    expected = (m1 * (np.sqrt(1 + r**2) - 1) if decay > 0 else 0.0) + interp + tau
+    assert est.bin_error_ == pytest.approx(expected, rel=1e-12)
+
+
+def test_binned_error_falls_with_the_bin_width():
+    X, y = data(5000, seed=32)
+    x = np.linspace(0, 1, 64)
+    N, D = direct_sums(x, X, y, 0.1, 0.0, "gaussian")
+    errors, bounds = [], []
+    for r in (0.4, 0.2, 0.1, 0.05):
+        est = NadarayaWatson("gaussian", 0.1, grid=x, binned=r).fit(X, y)
+        errors.append(np.max(np.abs(est.predict(x) - N / D)))
+        bounds.append(np.max(est.error_bound(x)))
+    errors_a, bounds_a = np.array(errors), np.array(bounds)
+    assert np.all(errors_a <= bounds_a)
+    # second order in r for the Gaussian: halving r divides the error by about 4
+    assert np.all(errors_a[1:] < errors_a[:-1] / 2.5), errors_a
+    assert np.all(bounds_a[1:] < bounds_a[:-1] / 3.5), bounds_a
+
+
+@pytest.mark.parametrize("cls", [SemiRecursiveKernelRegression, RecursiveKernelRegression])
+def test_binned_partial_fit_and_save_load_are_exact(tmp_path, cls):
+    X, y = data(6000, seed=33)
+    x = np.linspace(0, 1, 50)
+    kw = {"kernel": "gaussian", "bandwidth": 0.2, "decay": 0.2, "grid": x, "binned": 0.2}
+    whole = cls(**kw).fit(X, y)
+    parts = cls(**kw)
+    for s in range(0, 4000, 777):
+        parts.partial_fit(X[s : min(s + 777, 4000)], y[s : min(s + 777, 4000)])
+    parts.save(tmp_path / "b.npz")
+    resumed = cls.load(tmp_path / "b.npz")
+    assert resumed.binned == 0.2
+    resumed.partial_fit(X[4000:], y[4000:])
+    parts.partial_fit(X[4000:], y[4000:])
+    for est in (parts, resumed):
+        np.testing.assert_array_equal(est.predict(x), whole.predict(x))
+        np.testing.assert_array_equal(est.error_bound(x), whole.error_bound(x))
+    assert not np.array_equal(whole.predict(x), cls(**{**kw, "binned": None}).fit(X, y).predict(x))
+
+
+@pytest.mark.parametrize(
+    ("params", "X", "exc", "match"),
+    [
+        ({"binned": 0.1}, X1, ValueError, r"'binned'.*None in exact mode"),
+        ({"binned": 0.1, "grid": [0.0, 1.0], "kernel": "uniform"}, X1, ValueError, "binnable"),
+        ({"binned": 0.1, "grid": np.zeros((2, 2))}, X2, ValueError, r"'binned'.*d = 2"),
+        ({"binned": 0.9, "grid": [0.0, 1.0]}, X1, ValueError, r"'binned'.*\[0.0001, 0.5\]"),
+        ({"binned": -0.1, "grid": [0.0, 1.0]}, X1, ValueError, r"'binned'.*> 0"),
+        ({"binned": "fine", "grid": [0.0, 1.0]}, X1, TypeError, r"'binned'.*real"),
+    ],
+)
+def test_binned_bad_input(params, X, exc, match):
+    y = Y1 if X is X1 else Y2
+    with pytest.raises(exc, match=match):
+        SemiRecursiveKernelRegression(**params).fit(X, y)
+
+
+def test_binned_attributes_need_binned_mode():
+    est = SemiRecursiveKernelRegression(grid=[0.0, 0.5]).fit(X1, Y1)
+    with pytest.raises(AttributeError, match="binned mode only"):
+        _ = est.bin_error_
+    with pytest.raises(AttributeError, match="binned mode only"):
+        est.error_bound([0.0])

@@ -45,6 +45,15 @@ running sums) to one ``.npz`` file of plain arrays;
 :meth:`~SemiRecursiveKernelRegression.load` restores it, and continuing with
 ``partial_fit`` gives bit for bit what never stopping would have given.
 
+Binned mode (``binned=r``, grid mode, ``d = 1``) trades exactness for speed:
+the samples are linearly binned, block by block of nearly equal ``h_i``, onto
+bins ``r h`` wide, and the bins are smoothed onto the grid. It is off by
+default; :mod:`flexarm.ident.binning` derives its error bound, which
+:meth:`~SemiRecursiveKernelRegression.sum_error_bounds` and
+:meth:`~SemiRecursiveKernelRegression.error_bound` evaluate. Chunked
+``partial_fit`` still equals ``fit`` bit for bit, and ``save``/``load`` resume
+exactly (the open block's bins are part of the state).
+
 Hot loops are compiled with Numba (``cache=True``). Grid mode with ``d = 1``
 and a compact kernel touches only the grid points inside each sample's window
 (binary search in the sorted grid); the Gaussian likewise within
@@ -77,6 +86,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._io import atomic_path
 from .._validation import check_array, check_option, check_real
+from . import binning
 from .kernels import KERNELS, kernel_profile, kernel_weight
 
 __all__ = [
@@ -90,6 +100,8 @@ F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 
 _FORMAT = 1  # version of the save() file layout
+_BIN_MIN, _BIN_MAX = 1e-4, 0.5  # allowed relative bin widths r = delta / h
+_BIN_MAX_BINS = 2**24  # a block needing more bins than this is added exactly
 _CALLABLE = -1  # kernel code of a user callable (evaluated with NumPy)
 _GAUSS_ZERO = 38.61  # exp(-u**2 / 2) == 0.0 exactly in float64 for |u| > 38.61 (u**2/2 > 745.2)
 
@@ -122,13 +134,14 @@ def _sample_bandwidths(
 
 @nb.njit(cache=True)
 def _grid_update_1d(
-    code: int, gs: F64, x: F64, y: F64, h: F64, scale: F64, num: F64, den: F64
+    code: int, gs: F64, x: F64, y: F64, h: F64, scale: F64, num: F64, den: F64, radius: float
 ) -> None:  # pragma: no cover - compiled
     """``d = 1``: ``gs`` is the sorted grid and ``num``/``den`` follow its order.
 
     Each sample visits only the grid points in its window (``|u| <= 1``, or
-    ``38.61`` for the Gaussian, where its float64 value becomes exactly 0), found
-    by binary search (padded; the kernel itself decides the edge). The weight is
+    ``38.61`` for the Gaussian, where its float64 value becomes exactly 0; the
+    caller passes this ``radius``, smaller in binned mode), found by binary
+    search (padded; the kernel itself decides the edge). The weight is
     ``scale * k(u)``, the same floating-point operations as :func:`kernel_weight`
     (adding a zero weight, which that path skips, changes no sum).
     """
@@ -139,7 +152,7 @@ def _grid_update_1d(
         yi = y[i]
         # Window half-width in units of h: 1 for compact kernels; for the Gaussian
         # exp(-u**2/2) is exactly 0.0 in float64 beyond |u| = 38.61, so it is exact too.
-        r = (_GAUSS_ZERO if code == 0 else 1.0) * hi * (1.0 + 1e-9) + 1e-12 * abs(xi)
+        r = radius * hi * (1.0 + 1e-9) + 1e-12 * abs(xi)
         lo = np.searchsorted(gs, xi - r, side="left")
         up = np.searchsorted(gs, xi + r, side="right")
         if code == 0:
@@ -351,6 +364,28 @@ class _KernelRegression:
             )
         return decay
 
+    def _check_binned(self, code: int, d: int, has_grid: bool) -> float | None:
+        value = getattr(self, "binned", None)
+        if value is None:
+            return None
+        r = check_real(value, "binned", self._owner, positive=True)
+        if not _BIN_MIN <= r <= _BIN_MAX:
+            raise self._fail(
+                "binned", f"None or a relative bin width in [{_BIN_MIN:g}, {_BIN_MAX:g}]", repr(r)
+            )
+        if not has_grid:
+            raise self._fail("binned", "None in exact mode (binning needs a grid)", repr(r))
+        if d != 1:
+            raise self._fail("binned", f"None for d = {d} (binning is one-dimensional)", repr(r))
+        name = "a callable" if code == _CALLABLE else repr(KERNELS[code])
+        if code == _CALLABLE or KERNELS[code] not in binning.BINNABLE:
+            raise self._fail(
+                "binned",
+                f"None with kernel {name} (binnable kernels: {binning.BINNABLE})",
+                repr(r),
+            )
+        return r
+
     def _check_X(self, X: ArrayLike, name: str = "X") -> F64:
         arr = check_array(X, name, self._owner)
         if arr.dtype.kind == "c":
@@ -406,6 +441,14 @@ class _KernelRegression:
             "_grid_sorted",
             "_num",
             "_den",
+            "_bin",
+            "_blk",
+            "_bfl",
+            "_bcw",
+            "_bsw",
+            "_baw",
+            "_near",
+            "_bsums",
         ):
             self.__dict__.pop(name, None)
 
@@ -421,6 +464,7 @@ class _KernelRegression:
                 raise self._fail("grid", f"of {d} column(s) like X", f"{grid.shape[1]} column(s)")
             if grid.shape[0] == 0:
                 raise self._fail("grid", "non-empty", "0 points")
+        r = self._check_binned(code, d, grid is not None)
         if code == _CALLABLE:
             probe = np.zeros((3, d))
             probe[1:] = [[0.5], [-2.0]]
@@ -449,6 +493,15 @@ class _KernelRegression:
             self._grid_sorted = np.ascontiguousarray(grid[order])
             self._num = np.zeros(grid.shape[0])
             self._den = np.zeros(grid.shape[0])
+            if r is not None:
+                self._bin = r
+                self._blk = np.array([1, 1, 0], dtype=np.int64)  # start, end, mode (0/1/2)
+                self._bfl = np.zeros(3)  # h_B, origin, delta of the open block
+                self._bcw = np.zeros(0)  # bins of the open block: sum s_i, s_i Y_i, s_i |Y_i|
+                self._bsw = np.zeros(0)
+                self._baw = np.zeros(0)
+                self._near = np.zeros((2, grid.shape[0]))  # S_near, A_near (closed blocks)
+                self._bsums = np.zeros(2)  # S = sum s_i, A = sum s_i |Y_i| (all samples)
 
     def fit(self, X: ArrayLike, y: ArrayLike) -> Self:
         """Forget any previous state and fit to the samples.
@@ -508,8 +561,13 @@ class _KernelRegression:
     def _add(self, X: F64, y: F64) -> None:
         n0 = self.n_samples_
         m = X.shape[0]
-        h, scale = _sample_bandwidths(self.bandwidth_, self._decay, n0, m, self._recursive)
-        if hasattr(self, "grid_"):
+        if hasattr(self, "_bin"):
+            h = scale = np.empty((0, 1))  # binned mode computes what it needs per block
+        else:
+            h, scale = _sample_bandwidths(self.bandwidth_, self._decay, n0, m, self._recursive)
+        if hasattr(self, "_bin"):
+            self._add_binned(np.ascontiguousarray(X[:, 0]), y)
+        elif hasattr(self, "grid_"):
             if self._code == _CALLABLE:
                 self._grid_update_callable(X, y, h, scale)
             elif self.n_features_in_ == 1:
@@ -522,6 +580,7 @@ class _KernelRegression:
                     scale,
                     self._num,
                     self._den,
+                    _GAUSS_ZERO if self._code == 0 else 1.0,
                 )
             else:
                 _grid_update(
@@ -548,6 +607,167 @@ class _KernelRegression:
             self._h[n0:need] = h
             self._scale[n0:need] = scale
         self.n_samples_ = n0 + m
+
+    # ---------------------------------------------------------------- binned mode
+
+    def _add_binned(self, x: F64, y: F64) -> None:
+        """Binned grid mode (:mod:`flexarm.ident.binning`): samples go block by block."""
+        n0 = self.n_samples_
+        pos = 0
+        while pos < x.shape[0]:
+            i = n0 + pos + 1  # 1-based index of the next sample
+            if self._blk[2] == 0 or i >= self._blk[1]:
+                self._flush_block(self._num, self._den)
+                self._open_block(i)
+            stop = min(x.shape[0], int(self._blk[1]) - n0 - 1)
+            xs, ys = x[pos:stop], y[pos:stop]
+            if self._blk[2] == 2:  # short block: exact, sample by sample
+                h, scale = _sample_bandwidths(
+                    self.bandwidth_, self._decay, n0 + pos, stop - pos, self._recursive
+                )
+                gs = self._grid_sorted[:, 0]
+                c = binning.radius(KERNELS[self._code])
+                _grid_update_1d(self._code, gs, xs, ys, h[:, 0], scale, self._num, self._den, c)
+                self._bsums += (scale.sum(), (scale * np.abs(ys)).sum())
+            else:
+                binning.bin_samples(
+                    xs,
+                    ys,
+                    n0 + pos,
+                    float(self.bandwidth_[0]),
+                    self._decay,
+                    self._recursive,
+                    float(self._bfl[1]),
+                    float(self._bfl[2]),
+                    self._bcw,
+                    self._bsw,
+                    self._baw,
+                    self._bsums,
+                )
+            pos = stop
+
+    def _open_block(self, start: int) -> None:
+        r = self._bin
+        end = binning.block_end(start, r, self._decay)
+        hb = float(self.bandwidth_[0]) * (float(start) * float(end - 1)) ** (-self._decay / 2.0)
+        delta = r * hb
+        pad = binning.radius(KERNELS[self._code]) * hb + delta
+        gs = self._grid_sorted[:, 0]
+        bins = math.ceil((gs[-1] - gs[0] + 2.0 * pad) / delta) + 1
+        binned = bins <= min(end - start, _BIN_MAX_BINS)
+        self._blk[:] = (start, end, 1 if binned else 2)
+        self._bfl[:] = (hb, gs[0] - pad, delta)
+        self._bcw = np.zeros(bins if binned else 0)
+        self._bsw = np.zeros(bins if binned else 0)
+        self._baw = np.zeros(bins if binned else 0)
+
+    def _flush_block(self, num: F64, den: F64, near: F64 | None = None) -> None:
+        """Add the open binned block (if any) to ``num``, ``den``, ``near`` (sorted grid order)."""
+        if self._blk[2] != 1:
+            return
+        hb, origin, delta = (float(v) for v in self._bfl)
+        binning.flush_bins(
+            self._code,
+            self._grid_sorted[:, 0],
+            origin,
+            delta,
+            hb,
+            binning.radius(KERNELS[self._code]),
+            self._bcw,
+            self._bsw,
+            self._baw,
+            num,
+            den,
+            self._near if near is None else near,
+        )
+
+    def _grid_sums(self) -> tuple[F64, F64]:
+        """Running sums in sorted grid order, with the open binned block added (not stored)."""
+        return self._binned_sums()[:2]
+
+    def _binned_sums(self) -> tuple[F64, F64, F64]:
+        """``num``, ``den`` and (binned mode) ``near``, with the open block added."""
+        if hasattr(self, "_bin"):
+            if self._blk[2] == 1:
+                num, den, near = self._num.copy(), self._den.copy(), self._near.copy()
+                self._flush_block(num, den, near)
+                return num, den, near
+            return self._num, self._den, self._near
+        return self._num, self._den, np.zeros((2, 0))
+
+    def _check_binned_fitted(self, name: str) -> None:
+        self._check_fitted()
+        if not hasattr(self, "_bin"):
+            raise AttributeError(f"{name} is kept in binned mode only (binned is None)")
+
+    @property
+    def bin_error_(self) -> float:
+        """Bound ``E`` on the error of one binned kernel weight (binned mode only).
+
+        See :mod:`flexarm.ident.binning` and :meth:`sum_error_bounds`.
+        """
+        self._check_binned_fitted("bin_error_")
+        return binning.per_weight_error(KERNELS[self._code], self._bin, self._decay)
+
+    def sum_error_bounds(self, X: ArrayLike) -> tuple[F64, F64]:
+        """Bounds on the errors of the binned sums at grid points (binned mode only).
+
+        ``eN >= |N_binned(x) - N(x)|`` and ``eD >= |D_binned(x) - D(x)|`` with
+        ``N``, ``D`` the exact ``numerator_`` and ``denominator_``:
+        ``eN = E A_near(x) + (tau + rho) A``, ``eD = E S_near(x) + (tau + rho) S``
+        with ``rho = 4 (2 n + J + 16) 2**-53`` for the rounding of the sums
+        (``J`` bins in the open block); see :mod:`flexarm.ident.binning`.
+
+        Parameters
+        ----------
+        X : array_like, shape (m,) or (m, 1)
+            Grid points (units of the regressor).
+
+        Returns
+        -------
+        eN, eD : ndarray, shape (m,)
+            Bounds (units of the response times weight; weight).
+        """
+        self._check_binned_fitted("sum_error_bounds")
+        Q = self._check_X(X)
+        if Q.shape[1] != 1:
+            raise self._fail("X", "of 1 column like the training X", f"{Q.shape[1]}")
+        where = self._inv[self._grid_index(Q)]
+        near = self._binned_sums()[2][:, where]
+        e = self.bin_error_
+        tau = binning.far_error(KERNELS[self._code], self._bin)
+        s, a = (float(v) for v in self._bsums)
+        # rounding: sums of at most n terms into bins and bins (<= n, or this block's) onto the grid
+        rnd = 4.0 * (2 * self.n_samples_ + self._bcw.shape[0] + 16) * 2.0**-53
+        eN: F64 = e * near[1] + (tau + rnd) * a
+        eD: F64 = e * near[0] + (tau + rnd) * s
+        return eN, eD
+
+    def error_bound(self, X: ArrayLike) -> F64:
+        """Bound on ``|m_binned(x) - m(x)|`` at grid points, ``m`` the exact estimate.
+
+        ``(eN + |m_binned| eD) / (D_binned - eD)`` where ``D_binned > eD``
+        (:meth:`sum_error_bounds`), ``inf`` elsewhere, NaN where ``m_binned``
+        is NaN; see :mod:`flexarm.ident.binning`. Binned mode only.
+
+        Parameters
+        ----------
+        X : array_like, shape (m,) or (m, 1)
+            Grid points (units of the regressor).
+
+        Returns
+        -------
+        ndarray, shape (m,)
+            Bounds (units of the response).
+        """
+        eN, eD = self.sum_error_bounds(X)
+        m = self.predict(X)
+        where = self._inv[self._grid_index(self._check_X(X))]
+        den = self._grid_sums()[1][where]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out: F64 = np.where(den > eD, (eN + np.abs(m) * eD) / (den - eD), np.inf)
+        out[np.isnan(m)] = np.nan
+        return out
 
     def _callable_weights(self, Q: F64, X: F64, h: F64, scale: F64) -> F64:
         """Weights ``W[i, q] = scale_i K((Q_q - X_i) / h_i)`` from the user callable."""
@@ -611,7 +831,7 @@ class _KernelRegression:
         self._check_fitted()
         if not hasattr(self, "grid_"):
             raise AttributeError("numerator_ is kept in grid mode only (grid is None)")
-        out: F64 = self._num[self._inv]
+        out: F64 = self._grid_sums()[0][self._inv]
         return out
 
     @property
@@ -620,7 +840,7 @@ class _KernelRegression:
         self._check_fitted()
         if not hasattr(self, "grid_"):
             raise AttributeError("denominator_ is kept in grid mode only (grid is None)")
-        out: F64 = self._den[self._inv]
+        out: F64 = self._grid_sums()[1][self._inv]
         return out
 
     # ---------------------------------------------------------------- persistence
@@ -659,6 +879,17 @@ class _KernelRegression:
         else:
             n = self.n_samples_
             arrays.update(X=self._X[:n], y=self._y[:n], h=self._h[:n], scale=self._scale[:n])
+        if hasattr(self, "_bin"):
+            arrays.update(
+                binned=np.array(self._bin),
+                bin_block=self._blk,
+                bin_float=self._bfl,
+                bin_cw=self._bcw,
+                bin_sw=self._bsw,
+                bin_aw=self._baw,
+                bin_near=self._near,
+                bin_sums=self._bsums,
+            )
         with atomic_path(path) as tmp, open(tmp, "wb") as f:
             np.savez(f, **arrays)
 
@@ -692,6 +923,8 @@ class _KernelRegression:
         }
         if "decay" in names:
             kwargs["decay"] = float(data["decay"])
+        if "binned" in data:
+            kwargs["binned"] = float(data["binned"])
         est = cls(**kwargs)
         est._start(int(data["n_features_in"]))
         if "grid" in data:
@@ -702,6 +935,14 @@ class _KernelRegression:
             est._y = np.ascontiguousarray(data["y"])
             est._h = np.ascontiguousarray(data["h"])
             est._scale = np.ascontiguousarray(data["scale"])
+        if "binned" in data:
+            est._blk = np.ascontiguousarray(data["bin_block"], dtype=np.int64)
+            est._bfl = np.ascontiguousarray(data["bin_float"])
+            est._bcw = np.ascontiguousarray(data["bin_cw"])
+            est._bsw = np.ascontiguousarray(data["bin_sw"])
+            est._baw = np.ascontiguousarray(data["bin_aw"])
+            est._near = np.ascontiguousarray(data["bin_near"])
+            est._bsums = np.ascontiguousarray(data["bin_sums"])
         est.n_samples_ = int(data["n_samples"])
         return est
 
@@ -728,7 +969,7 @@ class _KernelRegression:
             raise self._fail("X", f"of {d} column(s) like the training X", f"{Q.shape[1]}")
         if hasattr(self, "grid_"):
             index = self._grid_index(Q)
-            out: F64 = _ratio(self._num, self._den)[self._inv[index]]
+            out: F64 = _ratio(*self._grid_sums())[self._inv[index]]
             return out
         n = self.n_samples_
         X_, y_, h_, s_ = self._X[:n], self._y[:n], self._h[:n], self._scale[:n]
@@ -779,6 +1020,11 @@ class SemiRecursiveKernelRegression(_KernelRegression):
         ``h_i = bandwidth * i**(-decay)``; ``0 <= decay <= 1/d``.
     grid : array_like of shape (g,) or (g, d), optional
         Evaluation points for grid mode; ``None`` (default) for exact mode.
+    binned : float, optional
+        ``None`` (default): exact sums. A number ``r`` in ``[1e-4, 0.5]``:
+        approximate grid mode (``d = 1``, continuous kernels) by linear binning
+        with bins ``r h`` wide, with a proven error bound; see
+        :mod:`flexarm.ident.binning`, :attr:`bin_error_` and :meth:`error_bound`.
 
     Attributes
     ----------
@@ -794,6 +1040,9 @@ class SemiRecursiveKernelRegression(_KernelRegression):
         Exact mode: stored samples and their ``h_i``.
     grid_, numerator_, denominator_ : ndarray, shape (g, d), (g,), (g,)
         Grid mode: the grid and the running sums ``sum Y_i K_i``, ``g_n = sum K_i``.
+    bin_error_ : float
+        Binned mode: the bound ``E`` on the error of one weight (see
+        :meth:`sum_error_bounds` and :meth:`error_bound`).
 
     Examples
     --------
@@ -813,11 +1062,13 @@ class SemiRecursiveKernelRegression(_KernelRegression):
         bandwidth: Any = 1.0,
         decay: float = 0.2,
         grid: ArrayLike | None = None,
+        binned: float | None = None,
     ) -> None:
         self.kernel = kernel
         self.bandwidth = bandwidth
         self.decay = decay
         self.grid = grid
+        self.binned = binned
 
 
 class RecursiveKernelRegression(_KernelRegression):
@@ -836,11 +1087,13 @@ class RecursiveKernelRegression(_KernelRegression):
         bandwidth: Any = 1.0,
         decay: float = 0.2,
         grid: ArrayLike | None = None,
+        binned: float | None = None,
     ) -> None:
         self.kernel = kernel
         self.bandwidth = bandwidth
         self.decay = decay
         self.grid = grid
+        self.binned = binned
 
 
 class NadarayaWatson(_KernelRegression):
@@ -856,7 +1109,9 @@ class NadarayaWatson(_KernelRegression):
         kernel: Any = "gaussian",
         bandwidth: Any = 1.0,
         grid: ArrayLike | None = None,
+        binned: float | None = None,
     ) -> None:
         self.kernel = kernel
         self.bandwidth = bandwidth
         self.grid = grid
+        self.binned = binned
