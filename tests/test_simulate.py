@@ -218,7 +218,7 @@ def test_parse_sensor_rejects(spec):
 
 # ------------------------------------------------------------------ divergence
 def test_divergence_raises_with_time_state_and_partial_result(paper, short_square):
-    # tip feedback with the paper's gains is unstable (closed-loop poles at +120, +70 rad/s)
+    # tip feedback with the paper's gains is unstable (linearised poles up to +116 rad/s)
     with pytest.raises(SimulationError) as info:
         simulate(paper, trajectory=short_square, sensor=TipSensor())
     err = info.value
@@ -328,3 +328,74 @@ def test_unreachable_trajectory_is_rejected(paper):
 
 def test_loop_state_layout():
     assert simloop.OK == 0 and simloop.DIVERGED == 1
+
+
+# ------------------------------------------------------- a point short of the tip
+def _rigid_point(arm, theta, link, distance):
+    """The point with straight links at joint angles ``theta`` (K, 2)."""
+    q = np.zeros((theta.shape[0], arm.n_dof))
+    q[:, :2] = theta
+    return arm.point_position(q, link, distance)
+
+
+def test_point_sensor_is_commanded_where_the_path_puts_it(paper, short_square):
+    res = simulate(paper, COLLOCATED, short_square, sensor=PointSensor(1, 0.5), duration=0.3)
+    theta_d = res.reference[:, 6:8]
+    np.testing.assert_allclose(
+        res.reference[:, 0:2], _rigid_point(paper, theta_d, 1, 0.5), atol=1e-12
+    )
+    # velocity: the derivative of that path (central differences of the positions)
+    dt = res.t[1] - res.t[0]
+    fd = (res.reference[2:, 0:2] - res.reference[:-2, 0:2]) / (2 * dt)
+    np.testing.assert_allclose(res.reference[1:-1, 2:4], fd, atol=1e-5)
+    np.testing.assert_allclose(res.desired, short_square.evaluate(res.t)[0], atol=1e-12)
+
+
+def test_jacobian_transpose_law_uses_the_sensed_points_jacobian(paper):
+    ctrl = JacobianTransposePD(kp=[[120.0, 5.0], [-3.0, 90.0]], kd=[[9.0, 1.0], [0.5, 7.0]])
+    params = ctrl.parameters_for(paper, PointSensor(1, 0.5))
+    rng = np.random.default_rng(11)
+    y = rng.normal(size=2 * 2 + 4 + 2)
+    r = rng.normal(size=10)
+    tau = ctrl(0.0, y, r, params, np.zeros(0))
+    # the point's rigid Jacobian by central differences of its position
+    theta = y[:2]
+    eps = 1e-6
+    jac = np.stack(
+        [
+            (
+                _rigid_point(paper, (theta + eps * e)[None], 1, 0.5)[0]
+                - _rigid_point(paper, (theta - eps * e)[None], 1, 0.5)[0]
+            )
+            / (2 * eps)
+            for e in np.eye(2)
+        ],
+        axis=1,
+    )
+    force = np.array(ctrl.kp) @ (r[0:2] - y[4:6]) + np.array(ctrl.kd) @ (r[2:4] - y[6:8])
+    np.testing.assert_allclose(tau, jac.T @ force, rtol=1e-8)
+    # joint encoders and the tip: the end effector's Jacobian (the link lengths)
+    for sensor in (JointSensor(), TipSensor(), None):
+        np.testing.assert_array_equal(ctrl.parameters_for(paper, sensor)[8:], [4.5, 4.5])
+
+
+def test_rigid_arm_settles_on_target_through_a_point_sensor(rigid):
+    from flexarm.trajectories import PointToPoint
+
+    move = PointToPoint((0.9, 0.6), (1.0, 0.8), 1.0)
+    res = simulate(
+        rigid,
+        JacobianTransposePD(kp=400.0, kd=60.0),
+        move,
+        sensor=PointSensor(1, 0.3),
+        duration=6.0,
+        dt=1e-3,
+    )
+    assert np.linalg.norm(res.error[-1]) < 1e-4  # the end effector reaches the goal
+
+
+def test_point_short_of_the_tip_needs_two_links():
+    arm3 = fa.FlexibleArm([fa.Link(1.0, 5.0, 1.0, n_modes=0)] * 3)
+    line = Line((1.5, 1.0), (1.6, 1.0), 1.0)
+    with pytest.raises(ValueError, match="'sensor'"):
+        simulate(arm3, JointPD(), line, sensor=PointSensor(1, 0.5), duration=0.1)

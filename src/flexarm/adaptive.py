@@ -44,6 +44,7 @@ from .controllers import (
     CONTROL_SIGNATURE,
     Controller,
     _gain_matrix,
+    operational_lengths,
 )
 from .fuzzy import CompiledFuzzySystem, FuzzySystem, evaluate_into, paper_system, workspace_size
 
@@ -286,11 +287,14 @@ class FuzzyAdaptiveJTPD(Controller):
         return fls.compiled()
 
     def parameters(self, arm: Any) -> F64:
+        return self.parameters_for(arm, None)
+
+    def parameters_for(self, arm: Any, sensor: Any) -> F64:
         owner = "FuzzyAdaptiveJTPD"
         kp = _gain_matrix(self.kp, "kp", owner)
         kd = _gain_matrix(self.kd, "kd", owner)
         compiled = self._checked_system(arm)
-        lengths = np.array([lk.length for lk in arm.links])
+        lengths = operational_lengths(arm, sensor)
         tips = tip_deflections(arm)
         head = [ADAPTATION_LAWS.index(self.law), self.ks, self.lambda0, tips.shape[1]]
         return np.concatenate(

@@ -16,7 +16,9 @@ Built in:
 * :class:`JointPD` — ``tau = Kp (theta_r - theta) + Kd (dtheta_r - dtheta)``.
 * :class:`JacobianTransposePD` — paper eq. 11,
   ``tau = J(theta)' [Kp (x_r - x) + Kd (v_r - v)]`` with ``J`` the rigid Jacobian of
-  the measured (collocated) angles and ``x, v`` from the sensor in use.
+  the measured (collocated) angles and ``x, v`` from the sensor in use: the end
+  effector's for joint encoders and the tip, the sensed point's for a point
+  short of the tip (a PD in the operational space of what is measured).
   ``JacobianTransposePD.from_arm(arm, zeta=0.707)`` gives the paper's gains
   ``Kp = omega_1**2 I``, ``Kd = 2 zeta omega_1 I`` from the exact first clamped
   frequency: 150.83 and 17.366 for the paper's arm (the paper prints 150.79 and
@@ -47,6 +49,7 @@ __all__ = [
     "Controller",
     "JacobianTransposePD",
     "JointPD",
+    "operational_lengths",
     "wrap_control_function",
 ]
 
@@ -155,6 +158,12 @@ class Controller:
     def initial_state(self, arm: Any) -> NDArray[np.float64]:
         return np.zeros(0)
 
+    def parameters_for(self, arm: Any, sensor: Any) -> NDArray[np.float64]:
+        """The ``params`` vector for ``arm`` read through ``sensor`` (what the
+        simulator passes). Default: :meth:`parameters`; operational-space laws
+        use the sensed point's Jacobian."""
+        return self.parameters(arm)
+
     def __call__(
         self,
         t: float,
@@ -220,6 +229,26 @@ def _gain_matrix(value: ArrayLike, name: str, owner: str) -> NDArray[np.float64]
     return g
 
 
+def operational_lengths(arm: Any, sensor: Any = None) -> NDArray[np.float64]:
+    """Lever lengths of the rigid Jacobian of the point an operational-space law controls.
+
+    The end effector (the link lengths) for joint encoders and the tip; for a
+    point ``distance`` along link ``l``: ``L_0, ..., L_{l-1}, distance, 0, ...``,
+    so that ``J' F`` is the rigid Jacobian of the sensed point and the law is a
+    PD in that point's operational space.
+    """
+    lengths = np.array([lk.length for lk in arm.links], dtype=float)
+    if sensor is None:
+        return lengths
+    link, distance, _ = sensor.resolve(arm)
+    if link < 0:
+        return lengths
+    out = np.zeros_like(lengths)
+    out[:link] = lengths[:link]
+    out[link] = distance
+    return out
+
+
 @dataclass(frozen=True)
 class JointPD(Controller):
     """Joint-space PD: ``tau = Kp (theta_r - theta) + Kd (dtheta_r - dtheta)``.
@@ -283,10 +312,12 @@ class JacobianTransposePD(Controller):
         return jacobian_transpose_pd_cfunc
 
     def parameters(self, arm: Any) -> NDArray[np.float64]:
+        return self.parameters_for(arm, None)
+
+    def parameters_for(self, arm: Any, sensor: Any) -> NDArray[np.float64]:
         kp = _gain_matrix(self.kp, "kp", "JacobianTransposePD")
         kd = _gain_matrix(self.kd, "kd", "JacobianTransposePD")
-        lengths = np.array([lk.length for lk in arm.links])
-        return np.concatenate([kp.ravel(), kd.ravel(), lengths])
+        return np.concatenate([kp.ravel(), kd.ravel(), operational_lengths(arm, sensor)])
 
 
 @dataclass(frozen=True)

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import base64
 import csv
+import dataclasses
 import html
 import io
 import json
@@ -40,6 +41,7 @@ import numpy as np
 from ._io import json_ready, output_directory
 from ._validation import check_int, check_option, check_real
 from .adaptive import ADAPTATION_LAWS
+from .linearize import closed_loop_poles
 from .results import SimulationResult
 from .scenario import Scenario
 from .simulate import SimulationError, simulate
@@ -154,6 +156,11 @@ class CaseResult:
         up are not tracking errors).
     delay_s : float
         The sensor delay the case ran with, s.
+    max_real_pole : float
+        Largest real part of the closed-loop poles linearised at the start of
+        the path, in continuous time without delay
+        (:func:`flexarm.linearize.closed_loop_poles`), rad/s: > 0 means the
+        loop cannot hold the path's start whatever the control period.
     result : SimulationResult
         The (partial, if diverged) time series, for the figures.
     """
@@ -163,6 +170,7 @@ class CaseResult:
     diverged_at_s: float | None
     metrics: dict[str, Any]
     delay_s: float
+    max_real_pole: float
     result: SimulationResult = field(repr=False)
 
     @property
@@ -183,6 +191,7 @@ class CaseResult:
             "delay_s": self.delay_s,
             "status": self.status,
             "diverged_at_s": self.diverged_at_s,
+            "max_real_pole_rad_s": self.max_real_pole,
             "rms_error_m": m.get("rms_error_m"),
             "max_error_m": m.get("max_error_m"),
             "corner_error_max_m": max(corners) if corners else None,
@@ -197,13 +206,16 @@ class CaseResult:
 def _run(case: Case, duration: float | None, dt: float) -> CaseResult:
     scenario = Scenario.from_dict(case.scenario_dict(duration, dt), source="reproduce")
     delay_s = scenario.delay.delay
+    start = np.asarray(scenario.trajectory.evaluate(np.zeros(1))[0][0], dtype=float)
+    poles = closed_loop_poles(scenario.arm, scenario.controller, start, scenario.sensor)
+    pole = float(poles[0].real)
     try:
         result = simulate(scenario.arm, **scenario.simulate_kwargs(), progress=False)
     except SimulationError as exc:
         partial = exc.result
         metrics = {"sim_time_s": float(exc.time), "wall_time_s": partial.info.get("wall_time_s")}
-        return CaseResult(case, "diverged", float(exc.time), metrics, delay_s, partial)
-    return CaseResult(case, "ok", None, result.metrics(), delay_s, result)
+        return CaseResult(case, "diverged", float(exc.time), metrics, delay_s, pole, partial)
+    return CaseResult(case, "ok", None, result.metrics(), delay_s, pole, result)
 
 
 @dataclass
@@ -439,6 +451,7 @@ def _html_table(rows: list[dict[str, Any]]) -> str:
         "delay_s",
         "status",
         "diverged_at_s",
+        "max_real_pole_rad_s",
         "rms_error_m",
         "max_error_m",
         "corner_error_max_m",
@@ -461,9 +474,10 @@ def _img(figures: dict[str, bytes], name: str, caption: str) -> str:
 
 # ------------------------------------------------------------------ claims
 def _describe(c: CaseResult) -> str:
+    pole = f"linearised poles up to Re {c.max_real_pole:+.3g} rad/s"
     if c.status != "ok":
-        return f"{_SENSOR_LABEL[c.case.sensor]}: diverged at t = {c.diverged_at_s:.3g} s"
-    return f"{_SENSOR_LABEL[c.case.sensor]}: RMS {c.rms:.3g} m"
+        return f"{_SENSOR_LABEL[c.case.sensor]}: diverged at t = {c.diverged_at_s:.3g} s ({pole})"
+    return f"{_SENSOR_LABEL[c.case.sensor]}: RMS {c.rms:.3g} m ({pole})"
 
 
 def _claims(
@@ -499,9 +513,9 @@ def _claims(
         {
             "claim": "Fuzzy adaptation improves on the nonadaptive law",
             "verdict": verdict(len(better), len(fz)),
-            "evidence": "lower RMS error than nonadaptive with the "
-            + (", ".join(_SENSOR_LABEL[a.case.sensor] for a, _ in better) or "no")
-            + " sensor(s) ("
+            "evidence": "sensors where the adaptive RMS error is lower: "
+            + (", ".join(_SENSOR_LABEL[a.case.sensor] for a, _ in better) or "none")
+            + " (adaptive vs nonadaptive: "
             + "; ".join(
                 f"{_SENSOR_LABEL[a.case.sensor]}: {a.rms:.4g} vs {b.rms:.4g} m"
                 for a in fz
@@ -642,11 +656,9 @@ def reproduce(
         out = []
         for c in cases:
             r = results[c.key()]
-            out.append(
-                r
-                if r.case == c
-                else CaseResult(c, r.status, r.diverged_at_s, r.metrics, r.delay_s, r.result)
-            )
+            if r.case != c:  # the same run under another name (pd ignores ks and law)
+                r = dataclasses.replace(r, case=c)
+            out.append(r)
         return out
 
     side = float(Scenario.from_dict({}, source="reproduce").trajectory.side)

@@ -86,6 +86,27 @@ def _joint_references(
     return theta, dtheta
 
 
+def _point_references(
+    arm: Any,
+    theta: NDArray[np.float64],
+    dtheta: NDArray[np.float64],
+    link: int,
+    distance: float,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Position and velocity of the point ``distance`` along ``link`` with rigid links
+    at the joint angles ``theta`` (K, N) and rates ``dtheta`` (K, N)."""
+    phi = np.cumsum(theta, axis=1)
+    dphi = np.cumsum(dtheta, axis=1)
+    lengths = [lk.length for lk in arm.links[:link]] + [distance]
+    pos = np.zeros((theta.shape[0], 2))
+    vel = np.zeros((theta.shape[0], 2))
+    for i, length in enumerate(lengths):
+        c, s = np.cos(phi[:, i]), np.sin(phi[:, i])
+        pos += length * np.stack([c, s], axis=1)
+        vel += length * dphi[:, i : i + 1] * np.stack([-s, c], axis=1)
+    return pos, vel
+
+
 def simulate(
     arm: Any,
     controller: Controller | None = None,
@@ -119,7 +140,11 @@ def simulate(
         (arrays (m, 2)), ``duration`` and ``corner_times``; default
         :class:`flexarm.trajectories.Square` ().
     sensor : JointSensor, PointSensor or TipSensor, optional
-        Default :class:`JointSensor` ().
+        Default :class:`JointSensor` (). With a point short of the end effector
+        (two-link arms), the operational-space command ``r[0:4]`` is that
+        point's desired position and velocity (rigid kinematics of the joint
+        references), so that ``e = x_c - x`` compares like with like; the
+        tracking errors are still those of the end effector.
     delay : DelayModel, optional
         Transport delay of the sensed signal (default none).
     delay_reference : bool
@@ -226,6 +251,20 @@ def simulate(
     if N == 2:
         theta_r, dtheta_r = _joint_references(arm, pos, vel, elbow)
         reference[:, 6 : 6 + N], reference[:, 6 + N :] = theta_r, dtheta_r
+    link_s, distance_s, _ = sensor.resolve(arm)
+    if link_s >= 0 and not (link_s == N - 1 and distance_s == arm.links[-1].length):
+        # A point short of the end effector is commanded where the desired path puts
+        # it: rigid kinematics of the joint references (paper.md §4: e = x_c - x with x
+        # the sensed point). Errors are still measured at the end effector.
+        if N != 2:
+            raise ValueError(
+                f"The 'sensor' parameter of {_OWNER} may be a point short of the end "
+                f"effector only on a two-link arm (its command needs inverse kinematics). "
+                f"Got {sensor!r} on a {N}-link arm instead."
+            )
+        p_r, v_r = _point_references(arm, theta_r, dtheta_r, link_s, distance_s)
+        reference[:, 0:2], reference[:, 2:4] = p_r, v_r
+        reference[:, 4:6] = np.gradient(v_r, dt, axis=0) if n_steps > 1 else 0.0
 
     # ------------------------------------------------------------ initial state
     if initial_state is None:
@@ -294,7 +333,7 @@ def simulate(
     )
 
     # ------------------------------------------------------------ run
-    params = np.ascontiguousarray(controller.parameters(arm), dtype=float)
+    params = np.ascontiguousarray(controller.parameters_for(arm, sensor), dtype=float)
     ny = measurement_size(N, sum(arm.n_modes))
     out = {
         "q": np.full((n_steps + 1, n), np.nan),

@@ -1,0 +1,179 @@
+"""Linearised closed loops: why a loop diverges, before simulating it.
+
+:func:`closed_loop_matrix` linearises ``x' = f(x)``, ``x = (q, dq)``, of an arm
+under a controller reading a sensor, in continuous time (the law applied
+continuously, undelayed, noise-free), about the arm at rest with its end
+effector at a given point, straight links and the law's reference there. The
+eigenvalues (:func:`closed_loop_poles`) tell whether that equilibrium is stable
+(all real parts < 0) and, with the control period, whether a sampled loop can
+be: the fastest real pole ``-a`` needs roughly ``dt < 2.8 / a`` under RK4 with a
+zero-order hold.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ._validation import check_array, check_option, check_real
+from .controllers import Controller
+from .sensors import JointSensor, PointSensor, TipSensor
+from .signals import measurement_size, reference_size
+
+__all__ = ["closed_loop_matrix", "closed_loop_poles"]
+
+F64 = NDArray[np.float64]
+_OWNER = "closed_loop_matrix"
+
+
+def _rigid_point(arm: Any, theta: F64, link: int, distance: float) -> F64:
+    q = np.zeros(arm.n_dof)
+    q[: arm.n_links] = theta
+    return np.asarray(arm.point_position(q, link, distance), dtype=float)
+
+
+def _measure(arm: Any, sensor: Any, q: F64, dq: F64, h: float) -> F64:
+    """The measurement ``y`` (:mod:`flexarm.signals`) of the state, undelayed
+    (``h``: the difference step, rad or modal units, of the point's velocity)."""
+    n_links = arm.n_links
+    y = np.zeros(measurement_size(n_links, sum(arm.n_modes)))
+    cols = arm.motor_slice if arm.has_flexible_joints else slice(0, n_links)
+    y[:n_links], y[n_links : 2 * n_links] = q[cols], dq[cols]
+    link, distance, _ = sensor.resolve(arm)
+    if link < 0:  # rigid kinematics of the encoder angles
+        theta, rate = y[:n_links], y[n_links : 2 * n_links]
+        phi, dphi = np.cumsum(theta), np.cumsum(rate)
+        lengths = np.array([lk.length for lk in arm.links])
+        y[2 * n_links : 2 * n_links + 2] = [
+            np.sum(lengths * np.cos(phi)),
+            np.sum(lengths * np.sin(phi)),
+        ]
+        y[2 * n_links + 2 : 2 * n_links + 4] = [
+            -np.sum(lengths * np.sin(phi) * dphi),
+            np.sum(lengths * np.cos(phi) * dphi),
+        ]
+    else:  # the deflected point; its velocity is linear in dq (central difference)
+        y[2 * n_links : 2 * n_links + 2] = arm.point_position(q, link, distance)
+        speed = float(np.linalg.norm(dq))
+        if speed > 0.0:
+            u = dq / speed
+            y[2 * n_links + 2 : 2 * n_links + 4] = (
+                speed
+                * (
+                    arm.point_position(q + h * u, link, distance)
+                    - arm.point_position(q - h * u, link, distance)
+                )
+                / (2 * h)
+            )
+    modal = slice(n_links, n_links + sum(arm.n_modes))
+    y[2 * n_links + 4 :] = q[modal]
+    return y
+
+
+def closed_loop_matrix(
+    arm: Any,
+    controller: Controller,
+    position: ArrayLike,
+    sensor: Any = None,
+    *,
+    elbow: str = "positive",
+    step: float = 1e-6,
+) -> F64:
+    """The state matrix ``A`` of the loop linearised about a rest point.
+
+    Parameters
+    ----------
+    arm : FlexibleArm
+        A two-link arm (the rest point comes from inverse kinematics).
+    controller : Controller
+        Evaluated continuously through its compiled law.
+    position : array_like, shape (2,)
+        End-effector rest point, m.
+    sensor : JointSensor, PointSensor or TipSensor, optional
+        Default joint encoders.
+    elbow : {"positive", "negative"}
+        Inverse-kinematics branch.
+    step : float
+        Relative central-difference step.
+
+    Returns
+    -------
+    ndarray, shape (2 n_dof, 2 n_dof)
+        ``d/dx [dq, ddq]`` at ``x = (q0, 0)``: straight links, the end effector at
+        ``position``, motors (flexible joints) at the link angles.
+    """
+    if arm.n_links != 2:
+        raise ValueError(
+            f"The 'arm' parameter of {_OWNER} must have two links (inverse kinematics). "
+            f"Got {arm.n_links} links instead."
+        )
+    if not isinstance(controller, Controller):
+        raise TypeError(
+            f"The 'controller' parameter of {_OWNER} must be a flexarm Controller. "
+            f"Got {type(controller).__name__} instead."
+        )
+    sensor = JointSensor() if sensor is None else sensor
+    if not isinstance(sensor, JointSensor | PointSensor | TipSensor):
+        raise TypeError(
+            f"The 'sensor' parameter of {_OWNER} must be a JointSensor, PointSensor or "
+            f"TipSensor. Got {type(sensor).__name__} instead."
+        )
+    target = check_array(position, "position", _OWNER, shape=(2,))
+    check_option(elbow, "elbow", _OWNER, ("positive", "negative"))
+    step = check_real(step, "step", _OWNER, positive=True)
+    n, n_links = arm.n_dof, arm.n_links
+    theta = np.asarray(arm.inverse_kinematics(target, elbow=elbow), dtype=float)
+    q0 = np.zeros(n)
+    q0[:n_links] = theta
+    if arm.has_flexible_joints:
+        q0[arm.motor_slice] = theta
+    link, distance, _ = sensor.resolve(arm)
+    r = np.zeros(reference_size(n_links))
+    point = (
+        target
+        if link < 0 or (link == n_links - 1 and distance == arm.links[-1].length)
+        else _rigid_point(arm, theta, link, distance)
+    )
+    r[0:2] = point
+    r[6 : 6 + n_links] = theta
+    params = np.ascontiguousarray(controller.parameters_for(arm, sensor), dtype=float)
+
+    def field(x: F64) -> F64:
+        q, dq = x[:n], x[n:]
+        y = _measure(arm, sensor, q, dq, 1e-5)
+        tau = controller(0.0, y, r, params, controller.initial_state(arm))
+        return np.concatenate([dq, arm.forward_dynamics(q, dq, tau)])
+
+    x0 = np.concatenate([q0, np.zeros(n)])
+    a = np.empty((2 * n, 2 * n))
+    for j in range(2 * n):
+        e = np.zeros(2 * n)
+        e[j] = step * max(1.0, abs(x0[j]))
+        a[:, j] = (field(x0 + e) - field(x0 - e)) / (2 * e[j])
+    return a
+
+
+def closed_loop_poles(
+    arm: Any,
+    controller: Controller,
+    position: ArrayLike,
+    sensor: Any = None,
+    **kwargs: Any,
+) -> NDArray[np.complex128]:
+    """Eigenvalues of :func:`closed_loop_matrix`, rad/s, sorted by real part (largest first).
+
+    Examples
+    --------
+    >>> import flexarm as fa
+    >>> from flexarm.controllers import JacobianTransposePD
+    >>> from flexarm.sensors import TipSensor
+    >>> arm = fa.FlexibleArm.paper()
+    >>> poles = closed_loop_poles(arm, JacobianTransposePD.from_arm(arm), (7.0, -2.0), TipSensor())
+    >>> bool(poles[0].real > 0)   # tip feedback: unstable
+    True
+    """
+    a = closed_loop_matrix(arm, controller, position, sensor, **kwargs)
+    poles = np.asarray(np.linalg.eigvals(a), dtype=np.complex128)
+    return poles[np.argsort(-poles.real, kind="stable")]
