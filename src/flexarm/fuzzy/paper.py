@@ -1,0 +1,116 @@
+"""The paper's adaptive law as a fuzzy system, and a surface plot."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._validation import check_int, check_option
+from .compiled import evaluate_many
+from .sets import LeftShoulder, RightShoulder, Rule, Triangle, Variable
+from .system import DEFUZZIFIERS, FuzzySystem
+
+__all__ = ["paper_system", "plot_surface"]
+
+FloatArray = NDArray[np.float64]
+
+
+# -------------------------------------------------------------- the paper system
+
+
+def paper_system(defuzzifier: str = "centroid") -> FuzzySystem:
+    """The paper's fuzzy adaptive law ``lambda(delta1, delta2)`` (module docstring).
+
+    The inputs are the link deformations in m, the output ``lambda`` in
+    ``[0, 1]`` is dimensionless. No rule-free region exists (every input pair
+    fires at least one rule), so the default (NaN) is never returned for
+    finite inputs.
+
+    Parameters
+    ----------
+    defuzzifier : {"centroid", "bisector", "mean-of-maxima"}
+        The paper uses the centroid.
+    """
+    check_option(defuzzifier, "defuzzifier", "paper_system", DEFUZZIFIERS)
+    deltas = [
+        Variable(
+            name,
+            (-5.0, 5.0),  # m
+            {
+                "N": LeftShoulder(-5.0, 0.0),
+                "ZERO": Triangle(-5.0, 0.0, 5.0),
+                "P": RightShoulder(0.0, 5.0),
+            },
+        )
+        for name in ("delta1", "delta2")
+    ]
+    lam = Variable(
+        "lambda",
+        (0.0, 1.0),
+        {
+            "ZERO": Triangle(0.0, 0.0, 0.5),
+            "PM": Triangle(0.0, 0.5, 1.0),
+            "PMAX": Triangle(0.5, 1.0, 1.0),
+        },
+    )
+    table = {
+        "N": ("PMAX", "PM", "PMAX"),
+        "ZERO": ("PM", "ZERO", "PM"),
+        "P": ("PMAX", "PM", "PMAX"),
+    }
+    rules = tuple(
+        Rule((d1, d2), cons)
+        for d1, row in table.items()
+        for d2, cons in zip(("N", "ZERO", "P"), row, strict=True)
+    )
+    return FuzzySystem(tuple(deltas), lam, rules, defuzzifier=defuzzifier)
+
+
+def plot_surface(fls: FuzzySystem, ax: Any = None, n: int = 101) -> tuple[Any, Any]:
+    """Draw the output of a two-input system over its input universes.
+
+    Parameters
+    ----------
+    fls : FuzzySystem
+        A system with exactly two inputs.
+    ax : matplotlib Axes, optional
+        A 3-D axes gets a surface, a 2-D axes a filled contour. ``None`` makes a
+        new figure with a 3-D axes.
+    n : int
+        Grid points per input.
+
+    Returns
+    -------
+    (ax, artist)
+        The axes and the surface (``Poly3DCollection``) or contour set.
+    """
+    if not isinstance(fls, FuzzySystem) or len(fls.inputs) != 2:
+        raise ValueError(
+            "The 'fls' parameter of plot_surface must be a FuzzySystem with two inputs. "
+            f"Got {fls!r} instead."
+        )
+    n = check_int(n, "n", "plot_surface", minimum=2)
+    import matplotlib.pyplot as plt
+
+    g1 = np.linspace(*fls.inputs[0].universe, n)
+    g2 = np.linspace(*fls.inputs[1].universe, n)
+    x1, x2 = np.meshgrid(g1, g2, indexing="ij")
+    try:
+        packed = fls.compiled()
+    except ValueError:
+        z = fls(x1, x2)
+    else:
+        z = evaluate_many(packed, np.column_stack([x1.ravel(), x2.ravel()])).reshape(x1.shape)
+    if ax is None:
+        fig = plt.figure()
+        ax = fig.add_subplot(projection="3d")
+    if getattr(ax, "name", "") == "3d":
+        artist = ax.plot_surface(x1, x2, z, cmap="viridis")
+        ax.set_zlabel(fls.output.name)
+    else:
+        artist = ax.contourf(x1, x2, z, levels=20, cmap="viridis")
+    ax.set_xlabel(fls.inputs[0].name)
+    ax.set_ylabel(fls.inputs[1].name)
+    return ax, artist
