@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from .. import __version__
-from . import modes, reproduce, simulate
+from . import identify, modes, reproduce, simulate
 from ._common import EXIT_USAGE, Parser, UsageError
 
 __all__ = ["build_parser", "main"]
@@ -31,7 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"flexarm {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
-    for command in (reproduce, simulate, modes):
+    for command in (reproduce, simulate, identify, modes):
         command.add_parser(sub)
     return parser
 

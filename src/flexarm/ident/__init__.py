@@ -6,6 +6,7 @@ state, and :mod:`flexarm.ident.kernels` for the kernels.
 
 from __future__ import annotations
 
+from .convergence import ConvergenceResult, convergence_study
 from .hammerstein import (
     ARMAFit,
     HammersteinIdentifier,
@@ -58,3 +59,4 @@ __all__ += [  # Hammerstein systems and their identification (issue 7)
     "simulate_hammerstein",
     "two_point_normalisation",
 ]
+__all__ += ["ConvergenceResult", "convergence_study"]  # Monte Carlo rate study (issue 6)

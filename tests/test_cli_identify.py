@@ -1,0 +1,298 @@
+"""``flexarm identify``: reading CSV / text / .npz columns, the fit and the study outputs,
+and one-line errors with status 2 and nothing written."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from flexarm.cli import main
+from flexarm.cli.identify import DataError, default_bandwidth, load_columns
+from flexarm.ident import SemiRecursiveKernelRegression
+
+N = 400
+FIT_FILES = {"estimate.csv", "estimate.png", "summary.json"}
+FIT_KEYS = {
+    "status",
+    "mode",
+    "data",
+    "columns",
+    "n_samples",
+    "dropped_nan_rows",
+    "estimator",
+    "kernel",
+    "bandwidth",
+    "bandwidth_rule",
+    "decay",
+    "last_bandwidth",
+    "binned",
+    "error_bound_max",
+    "grid",
+    "points_without_estimate",
+    "wall_time_s",
+    "out",
+    "files",
+    "estimate",
+}
+
+
+def run(capsys, *argv):
+    status = main(["identify", *(str(a) for a in argv)])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def strict_json(text):
+    def refuse(name):
+        raise ValueError(f"non-standard JSON constant {name}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+@pytest.fixture(scope="module")
+def samples():
+    rng = np.random.default_rng(7)
+    x = rng.uniform(-1, 1, N)
+    y = np.clip(1.5 * x, -0.75, 0.75) + 0.05 * rng.standard_normal(N)
+    return x, y
+
+
+@pytest.fixture()
+def files(tmp_path, samples):
+    x, y = samples
+    t = np.arange(N)
+    csv = tmp_path / "d.csv"
+    lines = ["time,u,w"] + [
+        f"{a},{b!r},{c!r}" for a, b, c in zip(t, x.tolist(), y.tolist(), strict=True)
+    ]
+    csv.write_text("\n".join(lines) + "\n")
+    txt = tmp_path / "d.txt"
+    txt.write_text(
+        "# a comment line\n"
+        + "\n".join(f"{b!r}  {c!r}" for b, c in zip(x.tolist(), y.tolist(), strict=True))
+    )
+    npz = tmp_path / "d.npz"
+    np.savez(npz, u=x, w=y)
+    table = tmp_path / "t.npz"
+    np.savez(table, np.column_stack([t, x, y]))
+    return {"csv": csv, "txt": txt, "npz": npz, "table": table}
+
+
+# ------------------------------------------------------------------ reading
+
+
+def test_load_columns_all_formats(files, samples):
+    x, y = samples
+    for path, cols in [
+        (files["csv"], ["u", "w"]),
+        (files["csv"], ["1", "2"]),
+        (files["csv"], [1, "w"]),
+        (files["txt"], ["0", "1"]),
+        (files["npz"], ["u", "w"]),
+        (files["npz"], [0, 1]),
+        (files["table"], [1, 2]),
+    ]:
+        a, b = load_columns(path, cols)
+        np.testing.assert_array_equal(a, x)
+        np.testing.assert_array_equal(b, y)
+
+
+def test_load_columns_empty_cells_are_nan(tmp_path):
+    p = tmp_path / "n.csv"
+    p.write_text("a,b,c\n1,2,x\n3,,y\nnan,4,z\n")
+    a, b = load_columns(p, ["a", "b"])  # column c is not numeric, and not asked for
+    np.testing.assert_array_equal(np.isnan(a), [False, False, True])
+    np.testing.assert_array_equal(np.isnan(b), [False, True, False])
+
+
+@pytest.mark.parametrize(
+    ("text", "suffix", "cols", "match"),
+    [
+        ("a,b\n1,2\n3\n", ".csv", ["a", "b"], "line 3: 1 field"),
+        ("a,b\n1,2\n3,oops\n", ".csv", ["a", "b"], "line 3, column 'b': 'oops' is not a number"),
+        ("a,b\n1,2\n", ".csv", ["a", "c"], "no column named 'c' \\(columns: a, b\\)"),
+        ("1 2\n3 4\n", ".txt", ["0", "5"], "column index 5 is out of range"),
+        ("1 2\n3 4\n", ".txt", ["x", "1"], "no column named 'x' \\(the file has no header\\)"),
+        ("a,b\n", ".csv", ["a", "b"], "header but no data rows"),
+        ("\n\n", ".txt", ["0", "1"], "holds no data"),
+        ("not a zip", ".npz", ["0", "1"], "not a readable .npz"),
+    ],
+)
+def test_load_columns_errors(tmp_path, text, suffix, cols, match):
+    p = tmp_path / f"bad{suffix}"
+    p.write_text(text)
+    with pytest.raises(DataError, match=match):
+        load_columns(p, cols)
+
+
+def test_default_bandwidth_is_silverman_at_the_last_sample(samples):
+    x, _ = samples
+    q75, q25 = np.percentile(x, [75, 25])
+    silverman = 0.9 * min(np.std(x, ddof=1), (q75 - q25) / 1.34) * N ** (-0.2)
+    for decay in (0.0, 0.2, 0.5):
+        h1 = default_bandwidth(x, decay)
+        assert h1 * N ** (-decay) == pytest.approx(silverman, rel=1e-12)
+
+
+# ------------------------------------------------------------------ fitting
+
+
+def test_json_summary_and_estimate(capsys, files, samples):
+    x, y = samples
+    status, out, err = run(capsys, files["csv"], "--x", "u", "--y", "w", "--json", "--grid", 64)
+    assert status == 0, err
+    s = strict_json(out)
+    assert set(s) == FIT_KEYS
+    assert s["status"] == "ok" and s["n_samples"] == N and s["dropped_nan_rows"] == 0
+    assert s["bandwidth_rule"] == "silverman" and s["grid"]["points"] == 64
+    grid = np.linspace(x.min(), x.max(), 64)
+    ref = SemiRecursiveKernelRegression("gaussian", s["bandwidth"], 0.2).fit(x, y).predict(grid)
+    np.testing.assert_allclose(s["estimate"]["m"], ref, rtol=1e-12)
+    np.testing.assert_allclose(s["estimate"]["x"], grid, rtol=0, atol=0)
+
+
+def test_formats_and_columns_give_the_same_estimate(capsys, files):
+    results = []
+    for argv in (
+        [files["csv"], "--x", "u", "--y", "w"],
+        [files["csv"], "--x", "1", "--y", "2"],
+        [files["txt"]],
+        [files["npz"], "--x", "u", "--y", "w"],
+        [files["table"], "--x", "1", "--y", "2"],
+    ):
+        status, out, err = run(capsys, *argv, "--json", "--grid", 32, "--bandwidth", 0.3)
+        assert status == 0, err
+        results.append(strict_json(out)["estimate"]["m"])
+    for r in results[1:]:
+        assert r == results[0]
+
+
+def test_out_writes_csv_png_and_summary(capsys, files, tmp_path):
+    out_dir = tmp_path / "res"
+    status, out, err = run(
+        capsys,
+        files["npz"],
+        "--x",
+        "u",
+        "--y",
+        "w",
+        "--out",
+        out_dir,
+        "--binned",
+        "--kernel",
+        "epanechnikov",
+        "--grid",
+        50,
+    )
+    assert status == 0, err
+    assert {p.name for p in out_dir.iterdir()} == FIT_FILES
+    table = np.loadtxt(out_dir / "estimate.csv", delimiter=",", skiprows=1)
+    assert table.shape == (50, 2)
+    s = json.loads((out_dir / "summary.json").read_text())
+    assert s["binned"] == 0.1 and s["kernel"] == "epanechnikov" and s["error_bound_max"] >= 0
+    assert (out_dir / "estimate.png").read_bytes()[:4] == b"\x89PNG"
+    assert "results in" in out
+
+
+def test_drop_nan_reports_the_count(capsys, tmp_path, samples):
+    x, y = samples
+    p = tmp_path / "gaps.csv"
+    rows = [f"{a!r},{b!r}" for a, b in zip(x.tolist(), y.tolist(), strict=True)]
+    rows[3] = f"{float(x[3])!r},"
+    rows[10] = f"nan,{float(y[10])!r}"
+    p.write_text("u,w\n" + "\n".join(rows) + "\n")
+    status, out, err = run(capsys, p, "--drop-nan", "--json", "--grid", 16)
+    assert status == 0, err
+    s = strict_json(out)
+    assert s["dropped_nan_rows"] == 2 and s["n_samples"] == N - 2
+
+
+# ------------------------------------------------------------------ errors
+
+
+def bad_file(tmp_path, name, text):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+@pytest.mark.parametrize(
+    ("make", "extra", "match"),
+    [
+        (lambda d: d / "missing.csv", [], "does not exist"),
+        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n"), ["--x", "q"], "no column named 'q'"),
+        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,x\n"), [], "'x' is not a number"),
+        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,\n3,4\n"), [], "1 row\\(s\\) have NaN"),
+        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,3\n"), ["--bandwidth", "-1"], "'bandwidth'"),
+        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,3\n"), ["--bandwidth", "wide"], "--bandwidth"),
+        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,3\n"), ["--kernel", "cosine"], "--kernel"),
+        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,3\n"), ["--decay", "3"], "'decay'"),
+        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,3\n"), ["--binned", "0.9"], "'binned'"),
+        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,3\n"), ["--grid", "1"], "--grid"),
+        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,3\n"), ["--study"], "not both"),
+        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,3\n"), ["--seed", "1"], "--study only"),
+        (lambda d: bad_file(d, "a.npz", "zzz"), [], "not a readable .npz"),
+        (lambda d: bad_file(d, "a.txt", "1 2\n3\n"), [], "line 2: 1 field"),
+    ],
+)
+def test_errors_are_one_line_with_status_2_and_nothing_written(
+    capsys, tmp_path, make, extra, match
+):
+    data = make(tmp_path)
+    out_dir = tmp_path / "out"
+    before = sorted(p.name for p in tmp_path.iterdir())
+    status, out, err = run(capsys, data, "--out", out_dir, *extra)
+    assert status == 2
+    assert out == ""
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert err.startswith("flexarm identify: error:")
+    assert pytest.importorskip("re").search(match, err), err
+    assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written
+
+
+def test_out_not_empty_is_refused(capsys, tmp_path, files):
+    out_dir = tmp_path / "full"
+    out_dir.mkdir()
+    (out_dir / "keep.txt").write_text("mine")
+    status, _, err = run(capsys, files["csv"], "--out", out_dir)
+    assert status == 2 and "not an empty directory" in err
+    assert [p.name for p in out_dir.iterdir()] == ["keep.txt"]
+
+
+def test_no_data_and_no_study_is_an_error(capsys):
+    status, _, err = run(capsys)
+    assert status == 2 and "DATA" in err and len(err.strip().splitlines()) == 1
+
+
+# ------------------------------------------------------------------ study
+
+
+def test_study_json_and_out(capsys, tmp_path):
+    argv = ["--study", "--n-min", 100, "--n-max", 800, "--n-steps", 3, "--repetitions", 3]
+    status, out, err = run(capsys, *argv, "--seed", 5, "--json")
+    assert status == 0, err
+    s = strict_json(out)
+    assert s["mode"] == "study" and s["n"] == [100, 283, 800] and len(s["mise"]) == 3
+    assert s["theory_slope"] == pytest.approx(-0.8) and s["seed"] == 5
+    status, out2, err = run(capsys, *argv, "--seed", 5, "--out", tmp_path / "st", "--json")
+    assert status == 0, err
+    again = strict_json(out2)
+    assert again["mise"] == s["mise"]  # seeded: the same numbers
+    assert {p.name for p in (tmp_path / "st").iterdir()} == {
+        "study.csv",
+        "study.png",
+        "summary.json",
+    }
+    table = np.loadtxt(tmp_path / "st" / "study.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(table[:, 1], s["mise"], rtol=1e-9)
+
+
+def test_study_bad_options(capsys, tmp_path):
+    status, _, err = run(capsys, "--study", "--n-min", 500, "--n-max", 100)
+    assert status == 2 and "--n-min < --n-max" in err
+    status, _, err = run(capsys, "--study", "--function", "cosine")
+    assert status == 2 and "--function" in err
+    status, _, err = run(capsys, "--study", "--x", "u")
+    assert status == 2 and "applies to DATA" in err
