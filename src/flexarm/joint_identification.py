@@ -328,8 +328,9 @@ class CurveEstimate:
 
     @property
     def relative_rms_error(self) -> float:
-        """:attr:`rms_error` over the range of the true curve on the grid."""
-        return self.rms_error / float(np.ptp(self.truth))
+        """:attr:`rms_error` over the range of the true curve on the grid (NaN if flat)."""
+        spread = float(np.ptp(self.truth))
+        return self.rms_error / spread if spread > 0.0 else math.nan
 
     def summary(self) -> dict[str, Any]:
         """Error figures as a JSON-able dict."""
@@ -339,7 +340,9 @@ class CurveEstimate:
             "y_unit": self.y_unit,
             "rms_error": self.rms_error,
             "max_error": self.max_error,
-            "relative_rms_error": self.relative_rms_error,
+            "relative_rms_error": (
+                None if math.isnan(self.relative_rms_error) else self.relative_rms_error
+            ),
         }
 
 

@@ -1,0 +1,132 @@
+"""Identifying the simulated robot joint (paper §IX): estimates against the true curves."""
+
+from __future__ import annotations
+
+import json
+
+import matplotlib
+import numpy as np
+import pytest
+
+import flexarm
+from flexarm.joint_identification import (
+    DriveNonlinearity,
+    JointExcitation,
+    JointSensors,
+    identify_joint,
+    joint_test_arm,
+)
+
+matplotlib.use("Agg")
+
+SHORT = JointExcitation(duration=20.0)
+
+
+@pytest.fixture(scope="module")
+def result():
+    return identify_joint(excitation=SHORT, rng=0)
+
+
+def test_stiffness_curve_and_soft_windup(result):
+    s = result.stiffness
+    joint = flexarm.NonlinearJoint.default()
+    np.testing.assert_allclose(s.truth, joint.torque(s.x))  # the truth is the model's law
+    assert s.x[0] < -5e-3 and s.x[-1] > 5e-3  # the cubic part is reached
+    assert s.rms_error < 0.1 and s.max_error < 1.0  # N m, over about +-170 N m
+    w = result.windup
+    # true secant stiffness near zero and outside the windup region, from the closed form
+    inner, width = 5e-5, 1 / np.sqrt(joint.asw)
+    k_in = (joint.torque(inner) - joint.torque(-inner)) / (2 * inner)
+    k_out = (joint.torque(4 * width) - joint.torque(2 * width)) / (2 * width)
+    assert w["stiffness_inside_true"] == pytest.approx(k_in, rel=0.05)  # grid interpolation
+    assert w["stiffness_outside_true"] == pytest.approx(k_out, rel=0.01)
+    assert w["stiffness_inside_estimate"] == pytest.approx(w["stiffness_inside_true"], rel=0.2)
+    assert w["stiffness_outside_estimate"] == pytest.approx(k_out, rel=0.02)
+    # resolved: the estimate is less than half as stiff inside the windup region as outside
+    assert w["stiffness_inside_estimate"] < 0.5 * w["stiffness_outside_estimate"]
+
+
+def test_friction_curve(result):
+    f = result.friction
+    friction = flexarm.MakkarFriction.default()
+    np.testing.assert_allclose(f.truth, friction(f.x))
+    assert f.x[0] < -0.2 and f.x[-1] > 0.2
+    assert f.rms_error < 0.1 and f.max_error < 0.4  # N m; static level 1.5 N m
+    # Stribeck hump: the peak is found near its true height
+    assert np.nanmax(f.estimate) == pytest.approx(np.max(f.truth), abs=0.1)
+
+
+def test_hammerstein_part(result):
+    d = result.drive
+    np.testing.assert_allclose(d.truth, DriveNonlinearity()(d.x))
+    assert d.relative_rms_error < 0.1
+    # the two-point normalisation from the drive's data sheet holds exactly
+    np.testing.assert_allclose(
+        result.hammerstein.nonlinearity([0.0, 48.0]), [0.0, 40.0], atol=1e-10
+    )
+    # free run on held-out data: close to what the true drive map with a fitted FIR achieves
+    assert result.fit_percent > 60
+    assert result.fit_percent > result.reference_fit_percent - 10
+    v = result.validation
+    assert v["y"].shape == v["y_hat"].shape == v["u"].shape == (667,)
+
+
+def test_torque_sensor_measures_the_windup_better():
+    res = identify_joint(excitation=SHORT, torque_measurement="sensor", rng=0)
+    w = res.windup
+    assert w["stiffness_inside_estimate"] == pytest.approx(w["stiffness_inside_true"], rel=0.05)
+    assert res.stiffness.rms_error < 0.05
+
+
+def test_linear_frictionless_joint_is_an_exact_hammerstein_plant():
+    arm = joint_test_arm(flexarm.LinearJoint(1e4, 0.3, motor_damping=10.0))
+    res = identify_joint(arm, excitation=SHORT, sensors=JointSensors(0, 0, 0, 0, 0), rng=1)
+    assert res.windup == {}
+    np.testing.assert_allclose(res.stiffness.truth, 1e4 * res.stiffness.x)
+    assert res.stiffness.relative_rms_error < 2e-4  # noise-free: discretisation and smoothing
+    assert res.friction.rms_error < 0.05 and np.all(res.friction.truth == 0)
+    assert res.reference_fit_percent > 95  # linear plant + drive map: Hammerstein exactly
+    assert res.summary()["friction"]["relative_rms_error"] is None
+
+
+def test_summary_plot_and_save(result, tmp_path):
+    summary = result.summary()
+    assert json.loads(json.dumps(summary)) == summary
+    assert summary["info"]["n_holds"] == 2000 and summary["info"]["hold_s"] == pytest.approx(0.01)
+    fig = result.plot()
+    assert len(fig.axes) >= 4
+    paths = result.save(tmp_path / "out")
+    assert [p.name for p in paths] == ["summary.json", "curves.npz", "identify_joint.png"]
+    with np.load(paths[1]) as z:
+        np.testing.assert_array_equal(z["stiffness_estimate"], result.stiffness.estimate)
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "exc", "match"),
+    [
+        ({"arm": flexarm.FlexibleArm.paper()}, ValueError, "'arm' parameter of identify_joint"),
+        ({"arm": 3}, TypeError, "'arm' parameter of identify_joint must be a FlexibleArm"),
+        ({"torque_measurement": "strain"}, ValueError, "'torque_measurement' parameter"),
+        ({"excitation": JointExcitation(duration=1.0)}, ValueError, "'excitation' parameter"),
+        ({"excitation": "long"}, TypeError, "'excitation' parameter .* JointExcitation"),
+        ({"validation_fraction": 1.5}, ValueError, "'validation_fraction' parameter"),
+        ({"quasi_static_fraction": 0.0}, ValueError, "'quasi_static_fraction' parameter"),
+        ({"friction_window": 0}, ValueError, "'friction_window' parameter"),
+        ({"rng": "seed"}, TypeError, "'rng' parameter of identify_joint"),
+    ],
+)
+def test_bad_input(kwargs, exc, match):
+    with pytest.raises(exc, match=match):
+        identify_joint(**kwargs)
+
+
+def test_parameter_classes_validate():
+    with pytest.raises(ValueError, match="'hold' parameter of JointExcitation"):
+        JointExcitation(hold=1e-5)
+    with pytest.raises(ValueError, match="'limit' parameter of DriveNonlinearity"):
+        DriveNonlinearity(limit=0.0)
+    with pytest.raises(ValueError, match="'rate_noise' parameter of JointSensors"):
+        JointSensors(rate_noise=-1.0)
