@@ -1,0 +1,101 @@
+"""The DaISy flexible robot arm (real data): examples/identify_daisy.py on the shared record.
+
+Skipped where ``shared/data/robot_arm.dat`` is absent (the data are never copied
+into the project).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import pathlib
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from flexarm.ident import ARMA, fit_percent
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "identify_daisy.py"
+DATA = ROOT.parent / "shared" / "data" / "robot_arm.dat"
+
+
+def _example():
+    spec = importlib.util.spec_from_file_location("identify_daisy", EXAMPLE)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+ex = _example()
+needs_data = pytest.mark.skipif(
+    not DATA.is_file(), reason=f"DaISy robot_arm.dat not found at {DATA} (shared/data absent)"
+)
+
+
+def test_arx_recovers_a_known_arma_exactly():
+    true = ARMA((1.5, -0.7), (0.0, 1.0, 0.5))
+    u = np.random.default_rng(0).normal(size=400)
+    model = ex.arx(u, true.filter(u), 2)
+    np.testing.assert_allclose(model.a, true.a, atol=1e-10)
+    np.testing.assert_allclose(model.b, true.b, atol=1e-10)
+
+
+def test_cross_covariance_is_the_impulse_response_for_white_input_only():
+    true = ARMA((0.8,), (1.0,))
+    rng = np.random.default_rng(1)
+    white = rng.normal(size=200_000)
+    lam = ex.cross_covariance(white, true.filter(white), 10)
+    # standard error sqrt(sum lambda**2 / n) = 0.004: allow five
+    np.testing.assert_allclose(lam, 0.8 ** np.arange(10), atol=0.02)
+    coloured = np.convolve(white, np.ones(5) / 5)[: white.shape[0]]  # lag-1 correlation 0.8
+    lam_c = ex.cross_covariance(coloured, true.filter(coloured), 10)
+    # closed form: sum_j lambda_j rho(k - j), rho the triangle autocorrelation of the average
+    rho = {d: (5 - abs(d)) / 5 for d in range(-4, 5)}
+    expected = [sum(0.8**j * rho.get(k - j, 0.0) for j in range(60)) for k in range(10)]
+    np.testing.assert_allclose(lam_c, expected, atol=0.03)
+    assert np.max(np.abs(lam_c - 0.8 ** np.arange(10))) > 1.0
+
+
+def test_missing_file_is_reported(tmp_path):
+    res = subprocess.run(
+        [sys.executable, str(EXAMPLE), str(tmp_path / "none.dat")],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert res.returncode == 2
+    assert "not found" in res.stderr and "Traceback" not in res.stderr
+
+
+@needs_data
+def test_daisy_linear_part_and_free_run_fit():
+    u, y = ex.load_daisy(DATA)
+    assert u.shape == y.shape == (1024,)
+    res = ex.identify(u, y)
+    assert res["input_lag1_autocorrelation"] > 0.7  # a sweep, not white noise
+    arx_fit, model = res["arx"]
+    assert arx_fit > 90.0  # free run on the held-out third
+    assert np.max(np.abs(model.poles)) < 1.0
+    # the same model, scored independently of identify()
+    n_fit = res["n_fit"]
+    assert fit_percent(y[n_fit:], model.filter(u)[n_fit:]) == pytest.approx(arx_fit)
+    # the white-input correlation formula is far off on a sine sweep
+    assert res["correlation"][0] < arx_fit - 40
+    assert res["hammerstein"][0] < arx_fit - 40
+
+
+@needs_data
+def test_daisy_script_runs(tmp_path):
+    png = tmp_path / "daisy.png"
+    res = subprocess.run(
+        [sys.executable, str(EXAMPLE), str(DATA), "--plot", str(png)],
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=ROOT,
+    )
+    assert res.returncode == 0, res.stderr
+    assert "least-squares ARX" in res.stdout and "sine sweep" in res.stdout
+    assert png.stat().st_size > 0
