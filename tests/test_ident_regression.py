@@ -291,6 +291,7 @@ def test_get_set_params_and_repr():
         "decay": 0.2,
         "grid": None,
         "binned": None,
+        "series": False,
     }
     assert repr(est) == "SemiRecursiveKernelRegression(bandwidth=0.5, kernel='uniform')"
     assert est.set_params(decay=0.1) is est and est.decay == 0.1
@@ -424,6 +425,8 @@ def test_decay_zero_equals_statsmodels_kernelreg():
     semi = SemiRecursiveKernelRegression(bandwidth=0.08, decay=0.0, grid=x).fit(X, y).predict(x)
     np.testing.assert_allclose(nw, ref, rtol=1e-12, atol=1e-13)
     np.testing.assert_allclose(semi, ref, rtol=1e-12, atol=1e-13)
+    fast = NadarayaWatson(bandwidth=0.08, series=True).fit(X, y).predict(x)
+    np.testing.assert_allclose(fast, ref, rtol=1e-12, atol=1e-13)
 
 
 # ----------------------------------------------------------------------------- binned mode
@@ -538,3 +541,84 @@ def test_binned_attributes_need_binned_mode():
         _ = est.bin_error_
     with pytest.raises(AttributeError, match="binned mode only"):
         est.error_bound([0.0])
+
+
+# ----------------------------------------------------------------------------- series mode
+
+
+def stable_eq14(x, X, y, h, scale=1.0):
+    """Eq. 14 for the Gaussian with one ``h``, each row's weights rescaled by its largest
+    (exact in exact arithmetic, and free of underflow far from the data)."""
+    L = -0.5 * ((x[:, None] - X[None, :]) / h) ** 2
+    W = np.exp(L - L.max(axis=1, keepdims=True))
+    out = (W @ y) / W.sum(axis=1)
+    out[L.max(axis=1) < -0.5 * 38.6**2] = np.nan  # no sample within 38.6 h: NaN
+    return out
+
+
+@pytest.mark.parametrize("grid_mode", [False, True], ids=["exact", "grid"])
+@pytest.mark.parametrize("h", [0.004, 0.05, 0.7])
+def test_series_agrees_with_direct_summation(grid_mode, h):
+    X, y = data(3000, seed=41)
+    x = np.linspace(-0.3, 1.3, 201)
+    kw = {"grid": x} if grid_mode else {}
+    got = NadarayaWatson("gaussian", h, series=True, **kw).fit(X, y).predict(x)
+    direct = NadarayaWatson("gaussian", h).fit(X, y).predict(x)
+    ref = stable_eq14(x, X, y, h)
+    ok = np.isfinite(ref)
+    np.testing.assert_allclose(got[ok], ref[ok], rtol=1e-11, atol=1e-13)
+    np.testing.assert_allclose(got[ok], direct[ok], rtol=1e-11, atol=1e-13)
+    rec = RecursiveKernelRegression("gaussian", h, decay=0.0, series=True, **kw)
+    np.testing.assert_allclose(rec.fit(X, y).predict(x)[ok], ref[ok], rtol=1e-11, atol=1e-13)
+
+
+def test_series_far_from_the_data_stays_accurate():
+    """Up to ~37.6 h the direct weights are normal floats; the series must match there."""
+    X, y = data(300, seed=42)
+    h = 0.01
+    x = np.linspace(-0.5, 1.5, 2001)
+    ref = stable_eq14(x, X, y, h)
+    dist = np.min(np.abs(x[:, None] - X[None, :]), axis=1) / h
+    near = dist < 37.5
+    assert (dist[near] > 20).any()  # the test reaches far out
+    for kw in ({}, {"grid": x}):
+        got = NadarayaWatson("gaussian", h, series=True, **kw).fit(X, y).predict(x)
+        np.testing.assert_allclose(got[near], ref[near], rtol=1e-11, atol=1e-13)
+        assert np.all(np.isnan(got[dist > 38.7]))
+        assert np.all(np.isfinite(got[dist < 38.6]))
+
+
+def test_series_partial_fit_and_save_load_are_exact(tmp_path):
+    X, y = data(5000, seed=43)
+    x = np.linspace(0, 1, 40)
+    kw = {"kernel": "gaussian", "bandwidth": 0.03, "grid": x, "series": True}
+    whole = NadarayaWatson(**kw).fit(X, y)
+    parts = NadarayaWatson(**kw)
+    for s in range(0, 3000, 611):
+        parts.partial_fit(X[s : min(s + 611, 3000)], y[s : min(s + 611, 3000)])
+    parts.save(tmp_path / "s.npz")
+    resumed = NadarayaWatson.load(tmp_path / "s.npz")
+    assert resumed.series is True
+    for est in (parts, resumed):
+        est.partial_fit(X[3000:], y[3000:])
+        np.testing.assert_array_equal(est.predict(x), whole.predict(x))
+        np.testing.assert_array_equal(est.denominator_, whole.denominator_)
+    N, D = direct_sums(x, X, y, 0.03, 0.0, "gaussian")
+    np.testing.assert_allclose(whole.numerator_, N, rtol=1e-11, atol=1e-9)
+    np.testing.assert_allclose(whole.denominator_, D, rtol=1e-11)
+
+
+@pytest.mark.parametrize(
+    ("params", "X", "exc", "match"),
+    [
+        ({"series": True, "kernel": "epanechnikov", "decay": 0.0}, X1, ValueError, "gaussian"),
+        ({"series": True}, X1, ValueError, r"'series'.*decay = 0"),
+        ({"series": True, "decay": 0.0}, X2, ValueError, r"'series'.*d = 2"),
+        ({"series": True, "decay": 0.0, "grid": [0, 1], "binned": 0.1}, X1, ValueError, "one"),
+        ({"series": 1, "decay": 0.0}, X1, TypeError, r"'series'.*bool"),
+    ],
+)
+def test_series_bad_input(params, X, exc, match):
+    y = Y1 if X is X1 else Y2
+    with pytest.raises(exc, match=match):
+        SemiRecursiveKernelRegression(**params).fit(X, y)

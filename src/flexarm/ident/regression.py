@@ -54,6 +54,12 @@ default; :mod:`flexarm.ident.binning` derives its error bound, which
 ``partial_fit`` still equals ``fit`` bit for bit, and ``save``/``load`` resume
 exactly (the open block's bins are part of the state).
 
+Series mode (``series=True``: Gaussian kernel, one bandwidth, ``d = 1``)
+computes the same sums by a Taylor series about clusters ``h/8`` wide (a fast
+Gauss transform; :func:`flexarm.ident.kernels.gauss_series_moments` bounds its
+error): ``O(n + m)`` work instead of ``O(n m)``, agreeing with direct summation
+to rounding (about 1e-13 relative per weight at worst), though not bit for bit.
+
 Hot loops are compiled with Numba (``cache=True``). Grid mode with ``d = 1``
 and a compact kernel touches only the grid points inside each sample's window
 (binary search in the sorted grid); the Gaussian likewise within
@@ -87,7 +93,16 @@ from numpy.typing import ArrayLike, NDArray
 from .._io import atomic_path
 from .._validation import check_array, check_option, check_real
 from . import binning
-from .kernels import KERNELS, kernel_profile, kernel_weight
+from .kernels import (
+    KERNELS,
+    SERIES_REACH,
+    SERIES_TERMS,
+    SERIES_WIDTH,
+    gauss_series_eval,
+    gauss_series_moments,
+    kernel_profile,
+    kernel_weight,
+)
 
 __all__ = [
     "NadarayaWatson",
@@ -102,6 +117,7 @@ I64 = NDArray[np.int64]
 _FORMAT = 1  # version of the save() file layout
 _BIN_MIN, _BIN_MAX = 1e-4, 0.5  # allowed relative bin widths r = delta / h
 _BIN_MAX_BINS = 2**24  # a block needing more bins than this is added exactly
+_SERIES_MAX_CLUSTERS = 2**22  # grid mode: (grid span + 2 reach) / (h/2) at most this
 _CALLABLE = -1  # kernel code of a user callable (evaluated with NumPy)
 _GAUSS_ZERO = 38.61  # exp(-u**2 / 2) == 0.0 exactly in float64 for |u| > 38.61 (u**2/2 > 745.2)
 
@@ -386,6 +402,28 @@ class _KernelRegression:
             )
         return r
 
+    def _check_series(self, code: int, d: int, decay: float, binned: float | None) -> bool:
+        value = getattr(self, "series", False)
+        if not isinstance(value, bool | np.bool_):
+            raise TypeError(
+                f"The 'series' parameter of {self._owner} must be a bool. Got {value!r} instead."
+            )
+        if not value:
+            return False
+        if code != 0:
+            raise self._fail("series", "False unless kernel='gaussian'", "True")
+        if d != 1:
+            raise self._fail("series", f"False for d = {d} (the series is one-dimensional)", "True")
+        if decay != 0.0:
+            raise self._fail("series", "False unless decay = 0 (one bandwidth)", "True")
+        if binned is not None:
+            raise self._fail("series", "False in binned mode (choose one)", "True")
+        return True
+
+    def _series_scale(self) -> float:
+        """The constant weight factor ``s``: ``1/h`` for the recursive estimate, else 1."""
+        return 1.0 / float(self.bandwidth_[0]) if self._recursive else 1.0
+
     def _check_X(self, X: ArrayLike, name: str = "X") -> F64:
         arr = check_array(X, name, self._owner)
         if arr.dtype.kind == "c":
@@ -449,6 +487,10 @@ class _KernelRegression:
             "_baw",
             "_near",
             "_bsums",
+            "_series",
+            "_smn",
+            "_smd",
+            "_sorigin",
         ):
             self.__dict__.pop(name, None)
 
@@ -465,6 +507,7 @@ class _KernelRegression:
             if grid.shape[0] == 0:
                 raise self._fail("grid", "non-empty", "0 points")
         r = self._check_binned(code, d, grid is not None)
+        series = self._check_series(code, d, decay, r)
         if code == _CALLABLE:
             probe = np.zeros((3, d))
             probe[1:] = [[0.5], [-2.0]]
@@ -472,6 +515,7 @@ class _KernelRegression:
             self._callable_weights(probe[:1], probe, np.ones((3, d)), np.ones(3))
         self._code = code
         self._decay = decay
+        self._series = series
         self._frozen = {
             k: copy.deepcopy(v) if isinstance(v, np.ndarray | list | tuple) else v
             for k, v in self.get_params().items()
@@ -493,6 +537,22 @@ class _KernelRegression:
             self._grid_sorted = np.ascontiguousarray(grid[order])
             self._num = np.zeros(grid.shape[0])
             self._den = np.zeros(grid.shape[0])
+            if series:
+                h = float(bw[0])
+                gs = self._grid_sorted[:, 0]
+                clusters = (
+                    math.ceil((gs[-1] - gs[0] + 2.0 * SERIES_REACH * h) / (SERIES_WIDTH * h)) + 2
+                )
+                if clusters > _SERIES_MAX_CLUSTERS:
+                    raise self._fail(
+                        "series",
+                        f"False when the grid spans more than {_SERIES_MAX_CLUSTERS // 2} "
+                        "bandwidths (too many clusters)",
+                        "True",
+                    )
+                self._sorigin = float(gs[0] - SERIES_REACH * h - SERIES_WIDTH * h)
+                self._smn = np.zeros((clusters, SERIES_TERMS))
+                self._smd = np.zeros((clusters, SERIES_TERMS))
             if r is not None:
                 self._bin = r
                 self._blk = np.array([1, 1, 0], dtype=np.int64)  # start, end, mode (0/1/2)
@@ -561,12 +621,22 @@ class _KernelRegression:
     def _add(self, X: F64, y: F64) -> None:
         n0 = self.n_samples_
         m = X.shape[0]
-        if hasattr(self, "_bin"):
-            h = scale = np.empty((0, 1))  # binned mode computes what it needs per block
+        if hasattr(self, "_bin") or (self._series and hasattr(self, "grid_")):
+            h = scale = np.empty((0, 1))  # binned/series modes compute what they need
         else:
             h, scale = _sample_bandwidths(self.bandwidth_, self._decay, n0, m, self._recursive)
         if hasattr(self, "_bin"):
             self._add_binned(np.ascontiguousarray(X[:, 0]), y)
+        elif self._series and hasattr(self, "grid_"):
+            gauss_series_moments(
+                np.ascontiguousarray(X[:, 0]),
+                y,
+                self._series_scale(),
+                self._sorigin,
+                float(self.bandwidth_[0]),
+                self._smn,
+                self._smd,
+            )
         elif hasattr(self, "grid_"):
             if self._code == _CALLABLE:
                 self._grid_update_callable(X, y, h, scale)
@@ -683,7 +753,28 @@ class _KernelRegression:
 
     def _grid_sums(self) -> tuple[F64, F64]:
         """Running sums in sorted grid order, with the open binned block added (not stored)."""
+        if self._series:
+            num, den, shift = self._series_grid()
+            scale = np.exp(-shift)
+            return num * scale, den * scale
         return self._binned_sums()[:2]
+
+    def _series_grid(self) -> tuple[F64, F64, F64]:
+        """Series mode: scaled sums and their shift at the sorted grid (see the kernels)."""
+        return gauss_series_eval(
+            np.ascontiguousarray(self._grid_sorted[:, 0]),
+            self._sorigin,
+            float(self.bandwidth_[0]),
+            self._smn,
+            self._smd,
+        )
+
+    def _grid_ratio(self) -> F64:
+        """``m`` at the sorted grid (series mode: from the scaled sums)."""
+        if self._series:
+            num, den, _ = self._series_grid()
+            return _ratio(num, den)
+        return _ratio(*self._grid_sums())
 
     def _binned_sums(self) -> tuple[F64, F64, F64]:
         """``num``, ``den`` and (binned mode) ``near``, with the open block added."""
@@ -873,9 +964,12 @@ class _KernelRegression:
             "decay": np.array(self._decay),
             "n_samples": np.array(self.n_samples_),
             "n_features_in": np.array(self.n_features_in_),
+            "series": np.array(self._series),
         }
         if hasattr(self, "grid_"):
             arrays.update(grid=self.grid_, num=self._num, den=self._den)
+            if self._series:
+                arrays.update(series_mn=self._smn, series_md=self._smd)
         else:
             n = self.n_samples_
             arrays.update(X=self._X[:n], y=self._y[:n], h=self._h[:n], scale=self._scale[:n])
@@ -925,11 +1019,16 @@ class _KernelRegression:
             kwargs["decay"] = float(data["decay"])
         if "binned" in data:
             kwargs["binned"] = float(data["binned"])
+        if bool(data.get("series", False)):
+            kwargs["series"] = True
         est = cls(**kwargs)
         est._start(int(data["n_features_in"]))
         if "grid" in data:
             est._num[:] = data["num"]
             est._den[:] = data["den"]
+            if "series_mn" in data:
+                est._smn = np.ascontiguousarray(data["series_mn"])
+                est._smd = np.ascontiguousarray(data["series_md"])
         else:
             est._X = np.ascontiguousarray(data["X"])
             est._y = np.ascontiguousarray(data["y"])
@@ -969,10 +1068,22 @@ class _KernelRegression:
             raise self._fail("X", f"of {d} column(s) like the training X", f"{Q.shape[1]}")
         if hasattr(self, "grid_"):
             index = self._grid_index(Q)
-            out: F64 = _ratio(*self._grid_sums())[self._inv[index]]
+            out: F64 = self._grid_ratio()[self._inv[index]]
             return out
         n = self.n_samples_
         X_, y_, h_, s_ = self._X[:n], self._y[:n], self._h[:n], self._scale[:n]
+        if self._series:
+            hs = float(self.bandwidth_[0])
+            x0 = np.ascontiguousarray(X_[:, 0])
+            origin = float(x0.min()) - 0.5 * SERIES_WIDTH * hs
+            clusters = int((float(x0.max()) - origin) / (SERIES_WIDTH * hs)) + 2
+            if clusters <= max(64, 4 * n):  # else the series gains nothing: sum directly
+                mn = np.zeros((clusters, SERIES_TERMS))
+                md = np.zeros((clusters, SERIES_TERMS))
+                gauss_series_moments(x0, y_, self._series_scale(), origin, hs, mn, md)
+                num, den, _ = gauss_series_eval(np.ascontiguousarray(Q[:, 0]), origin, hs, mn, md)
+                rs: F64 = _ratio(num, den)
+                return rs
         if self._code != _CALLABLE:
             if d == 1:
                 r1: F64 = _exact_predict_1d(self._code, Q[:, 0], X_[:, 0], y_, h_[:, 0], s_)
@@ -1025,6 +1136,18 @@ class SemiRecursiveKernelRegression(_KernelRegression):
         approximate grid mode (``d = 1``, continuous kernels) by linear binning
         with bins ``r h`` wide, with a proven error bound; see
         :mod:`flexarm.ident.binning`, :attr:`bin_error_` and :meth:`error_bound`.
+    series : bool, default False
+        Gaussian kernel with one bandwidth (``decay = 0``), ``d = 1``: compute
+        the kernel sums by a Taylor series about clusters ``h/8`` wide (a fast
+        Gauss transform, :func:`flexarm.ident.kernels.gauss_series_moments`),
+        ``O(n + m)`` instead of ``O(n m)``. Each weight keeps a relative error
+        of at most ~1e-13 (truncation 2.7e-17, cancellation), so the result
+        agrees with direct summation to rounding, but not bit for bit. Where
+        every direct weight is subnormal (``x`` farther than ~37.6 h from all
+        samples) the series, which rescales them, is the more accurate; it
+        gives NaN only beyond 38.67 h from every sample (direct: 38.61 h).
+        Grid mode keeps the cluster moments as its state (chunked
+        ``partial_fit`` equals ``fit`` bit for bit).
 
     Attributes
     ----------
@@ -1063,12 +1186,14 @@ class SemiRecursiveKernelRegression(_KernelRegression):
         decay: float = 0.2,
         grid: ArrayLike | None = None,
         binned: float | None = None,
+        series: bool = False,
     ) -> None:
         self.kernel = kernel
         self.bandwidth = bandwidth
         self.decay = decay
         self.grid = grid
         self.binned = binned
+        self.series = series
 
 
 class RecursiveKernelRegression(_KernelRegression):
@@ -1088,12 +1213,14 @@ class RecursiveKernelRegression(_KernelRegression):
         decay: float = 0.2,
         grid: ArrayLike | None = None,
         binned: float | None = None,
+        series: bool = False,
     ) -> None:
         self.kernel = kernel
         self.bandwidth = bandwidth
         self.decay = decay
         self.grid = grid
         self.binned = binned
+        self.series = series
 
 
 class NadarayaWatson(_KernelRegression):
@@ -1110,8 +1237,10 @@ class NadarayaWatson(_KernelRegression):
         bandwidth: Any = 1.0,
         grid: ArrayLike | None = None,
         binned: float | None = None,
+        series: bool = False,
     ) -> None:
         self.kernel = kernel
         self.bandwidth = bandwidth
         self.grid = grid
         self.binned = binned
+        self.series = series
