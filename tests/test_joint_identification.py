@@ -130,3 +130,22 @@ def test_parameter_classes_validate():
         DriveNonlinearity(limit=0.0)
     with pytest.raises(ValueError, match="'rate_noise' parameter of JointSensors"):
         JointSensors(rate_noise=-1.0)
+
+
+def test_example_script(tmp_path, capsys):
+    import importlib.util
+    import pathlib
+
+    path = pathlib.Path(__file__).resolve().parents[1] / "examples" / "identify_joint.py"
+    spec = importlib.util.spec_from_file_location("identify_joint_example", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert module.main(["--duration", "20", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "soft windup" in out and "Hammerstein model" in out
+    assert (tmp_path / "identify_joint.png").stat().st_size > 0
+    assert module.main(["--duration", "2"]) == 2  # too short: one line on stderr
+    assert "at least 300 holds" in capsys.readouterr().err
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
