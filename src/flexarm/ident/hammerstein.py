@@ -468,7 +468,9 @@ class HammersteinIdentifier:
             for p in inspect.signature(type(self).__init__).parameters.values()
             if p.name != "self"
         }
-        shown = [f"{k}={v!r}" for k, v in self.get_params().items() if v != defaults.get(k)]
+        shown = [
+            f"{k}={v!r}" for k, v in self.get_params().items() if repr(v) != repr(defaults.get(k))
+        ]
         return f"{_OWNER}({', '.join(shown)})"
 
     def _validated(self) -> dict[str, Any]:
@@ -530,7 +532,16 @@ class HammersteinIdentifier:
     def _reset(self) -> None:
         for name in [k for k in vars(self) if k.endswith("_") and not k.startswith("__")]:
             delattr(self, name)
-        for name in ("_params", "_buffer_u", "_buffer_y", "_tail", "_sums", "_cache"):
+        for name in (
+            "_params",
+            "_frozen",
+            "_buffer_u",
+            "_buffer_y",
+            "_tail",
+            "_sums",
+            "_grid_all",
+            "_cache",
+        ):
             self.__dict__.pop(name, None)
 
     def fit(self, u: ArrayLike, y: ArrayLike) -> Self:
@@ -635,7 +646,6 @@ class HammersteinIdentifier:
             for _ in range(p["n_lags"])
         ]
         self._tail = np.zeros(0)
-        self._n_paired = 0
 
     def _add(self, u: F64, y: F64) -> None:
         L = self._params["n_lags"]
