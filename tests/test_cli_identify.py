@@ -28,6 +28,7 @@ FIT_KEYS = {
     "decay",
     "last_bandwidth",
     "binned",
+    "series",
     "error_bound_max",
     "grid",
     "points_without_estimate",
@@ -194,6 +195,18 @@ def test_out_writes_csv_png_and_summary(capsys, files, tmp_path):
     assert s["binned"] == 0.1 and s["kernel"] == "epanechnikov" and s["error_bound_max"] >= 0
     assert (out_dir / "estimate.png").read_bytes()[:4] == b"\x89PNG"
     assert "results in" in out
+
+
+def test_series_equals_direct_sums(capsys, files):
+    argv = [files["npz"], "--x", "u", "--y", "w", "--json", "--decay", 0, "--grid", 40]
+    _, out, _ = run(capsys, *argv)
+    status, out_series, err = run(capsys, *argv, "--series")
+    assert status == 0, err
+    direct, series = strict_json(out)["estimate"]["m"], strict_json(out_series)["estimate"]["m"]
+    assert strict_json(out_series)["series"] is True
+    np.testing.assert_allclose(series, direct, rtol=1e-12)
+    status, _, err = run(capsys, files["npz"], "--series")  # decay 0.2: refused
+    assert status == 2 and "'series'" in err
 
 
 def test_drop_nan_reports_the_count(capsys, tmp_path, samples):
