@@ -622,3 +622,11 @@ def test_series_bad_input(params, X, exc, match):
     y = Y1 if X is X1 else Y2
     with pytest.raises(exc, match=match):
         SemiRecursiveKernelRegression(**params).fit(X, y)
+
+
+def test_series_falls_back_to_direct_sums_when_clusters_outnumber_samples():
+    X = np.array([0.0, 0.3, 1000.0])  # 8e5 clusters of h/8 for 3 samples
+    y = np.array([1.0, 2.0, 3.0])
+    x = np.array([0.1, 0.2, 999.99])
+    fast = NadarayaWatson("gaussian", 0.01, series=True).fit(X, y).predict(x)
+    np.testing.assert_array_equal(fast, NadarayaWatson("gaussian", 0.01).fit(X, y).predict(x))

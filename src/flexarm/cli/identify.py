@@ -525,7 +525,8 @@ Silverman's rule of thumb 0.9 min(sd, IQR/1.34) n^(-1/5) of the input column
 (with the default decay 0.2, h_1 = 0.9 min(sd, IQR/1.34)).
 
 --binned [R]: approximate grid mode with bins R h wide (default R = 0.1; R in
-[1e-4, 0.5]; gaussian, epanechnikov or triangular kernel); the summary reports
+[1e-4, 0.5]; gaussian, epanechnikov or triangular kernel; write --binned=R, or
+put DATA first, so that DATA is not taken for R); the summary reports
 the proven bound on its error (flexarm.ident.binning). --series (gaussian kernel,
 --decay 0): the same sums by a Taylor series (fast Gauss transform), O(n + N)
 instead of O(n N) work, equal to the direct sums to rounding.
