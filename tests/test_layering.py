@@ -42,6 +42,7 @@ LAYERS = {
     "cli.modes": 9,
     "cli.simulate": 9,
     "cli.identify": 9,
+    "cli._hammerstein": 9,
     "cli.reproduce": 9,
     "__main__": 9,
     "__init__": 9,

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 
 from ..ident import KERNELS, SemiRecursiveKernelRegression
 from ..ident.convergence import DISTRIBUTIONS, FUNCTIONS, ConvergenceResult, convergence_study
+from . import _hammerstein
 from ._common import EXIT_FAILURE, UsageError, check_out, json_ready, output_directory
 
 __all__ = [
@@ -418,7 +419,65 @@ _STUDY_ONLY = (
 )
 
 
+_HAMMERSTEIN_ONLY = ("lags", "order", "known", "duration", "torque_sensor")
+_STATIC_ONLY = ("kernel", "bandwidth", "decay", "grid", "binned", "series")
+
+
+def _hammerstein_mode(args: argparse.Namespace) -> tuple[Path | None, Any]:
+    """Check the options of ``--hammerstein``; return ``(out, job)``."""
+    if args.study:
+        raise _fail("give either --hammerstein or --study, not both")
+    given = [o for o in (*_STATIC_ONLY, *_STUDY_ONLY) if getattr(args, o) not in (None, False)]
+    given = [o for o in given if not (o == "kernel" and args.kernel == "gaussian")]
+    given = [o for o in given if not (o == "seed" and args.data is None)]
+    if given:
+        raise _fail(f"argument --{given[0].replace('_', '-')}: does not apply to --hammerstein")
+    if args.data is not None:
+        robot = [o for o in ("duration", "torque_sensor") if getattr(args, o) not in (None, False)]
+        if robot:
+            raise _fail(
+                f"argument --{robot[0].replace('_', '-')}: applies to the robot experiment "
+                "(--hammerstein without DATA)"
+            )
+        args.x = "0" if args.x is None else args.x
+        args.y = "1" if args.y is None else args.y
+    else:
+        fit = [o for o in ("x", "y", "drop_nan", "known") if getattr(args, o) not in (None, False)]
+        if fit:
+            raise _fail(f"argument --{fit[0].replace('_', '-')}: applies to DATA")
+    if args.lags is not None and args.lags < 2:
+        raise _fail(f"argument --lags: must be >= 2, got {args.lags}")
+    out = Path(os.path.abspath(args.out)) if args.out is not None else None
+    if out is not None:
+        check_out(out, PROG)
+
+    def job() -> Any:
+        if args.data is None:
+            return _hammerstein.run_robot(args, out)
+        x, y, dropped = _read_xy(args)
+        return _hammerstein.fit_data(x, y, dropped, args, out)
+
+    return out, job
+
+
 def _cmd_identify(args: argparse.Namespace) -> int:
+    if args.hammerstein:
+        out, job = _hammerstein_mode(args)
+        try:
+            summary = job()
+        except OSError as exc:
+            print(f"{PROG}: error: cannot write {str(out)!r}: {exc}", file=sys.stderr)
+            return EXIT_FAILURE
+        if args.json:
+            print(json.dumps(summary, indent=2))
+        else:
+            print(_hammerstein.format_summary(summary))
+            if out is not None:
+                print(f"  results in {out}: {', '.join(summary['files'])}")
+        return 0
+    given = [o for o in _HAMMERSTEIN_ONLY if getattr(args, o) not in (None, False)]
+    if given:
+        raise _fail(f"argument --{given[0].replace('_', '-')}: applies to --hammerstein only")
     if args.study:
         if args.data is not None:
             raise _fail("give either DATA or --study, not both")
@@ -537,6 +596,18 @@ default_rng(--seed); prints the table and the fitted log-log slope beside the
 theoretical -2p/(2p+1). --bandwidth, --decay and --kernel apply (defaults 0.3,
 1/(2p+1), gaussian).
 
+--hammerstein DATA: HammersteinIdentifier (flexarm.ident) on u = --x, y = --y: the
+linear part by the correlation approach (--lags, ARMA --order by BIC by default),
+the nonlinearity by eq. 14 -- up to an affine map unless --known gives two points
+where it is known (the paper's two-point normalisation). Writes nonlinearity.csv,
+impulse_response.csv, hammerstein.png and summary.json; reports the free-run fit.
+The correlation approach assumes a white (i.i.d.) input.
+--hammerstein without DATA: the robot experiment (paper section IX): a nonlinear
+flexible joint driven by a random torque for --duration s (--seed), its stiffness,
+friction and drive curves identified and compared with the truth
+(flexarm.joint_identification); writes summary.json, curves.npz and
+identify_joint.png.
+
 output: with --out DIR (new or empty), DIR receives estimate.csv (x,m),
 estimate.png (data and estimate) and summary.json -- or study.csv (n,mise,std),
 study.png and summary.json -- all at once, only if everything succeeded.
@@ -551,7 +622,8 @@ def add_parser(sub: Any) -> None:
     """Add ``identify`` to the subcommands ``sub``."""
     p = sub.add_parser(
         "identify",
-        help="nonparametric estimate of a static nonlinearity from data (or --study)",
+        help="nonparametric identification: a static nonlinearity from data, a "
+        "Hammerstein model (--hammerstein), or a convergence study (--study)",
         description=_DESCRIPTION,
         epilog=_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -587,9 +659,36 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--n-max", type=int, metavar="N", help="study: largest n (default 16000)")
     p.add_argument("--n-steps", type=int, metavar="K", help="study: sample sizes (default 7)")
     p.add_argument("--repetitions", type=int, metavar="R", help="study: data sets (default 20)")
-    p.add_argument("--seed", type=int, metavar="S", help="study: seed (default 0)")
+    p.add_argument("--seed", type=int, metavar="S", help="study, robot experiment: seed (0)")
     p.add_argument("--noise", type=float, metavar="SIGMA", help="study: noise std (default 0.1)")
     p.add_argument("--distribution", choices=DISTRIBUTIONS, help="study: inputs (default uniform)")
+    p.add_argument(
+        "--hammerstein",
+        action="store_true",
+        help="a Hammerstein model of DATA (u = --x, y = --y), or without DATA the "
+        "nonlinear-joint robot experiment (see below)",
+    )
+    p.add_argument("--lags", type=int, metavar="N", help="hammerstein: impulse response (40)")
+    p.add_argument(
+        "--order",
+        type=_hammerstein.parse_order,
+        metavar="bic|aic|N",
+        help="hammerstein: ARMA order or criterion (default bic)",
+    )
+    p.add_argument(
+        "--known",
+        type=_hammerstein.parse_known,
+        metavar="X1:PHI1,X2:PHI2",
+        help="hammerstein: two points of the nonlinearity (two-point normalisation)",
+    )
+    p.add_argument(
+        "--duration", type=float, metavar="SECONDS", help="robot experiment: record (default 60)"
+    )
+    p.add_argument(
+        "--torque-sensor",
+        action="store_true",
+        help="robot experiment: a joint torque sensor measures tau_s (default: motor balance)",
+    )
     p.add_argument("--out", metavar="DIR", help="write the results into DIR (see below)")
     p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
     p.set_defaults(func=_cmd_identify)
