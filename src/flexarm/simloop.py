@@ -24,7 +24,9 @@ from .kernels import (
     LEN,
     ArmArrays,
     Workspace,
-    forward_dynamics,
+    forward_dynamics_general,
+    forward_dynamics_two_links_one_mode,
+    is_two_links_one_mode,
     njit_runtime_free,
     point_kinematics,
 )
@@ -124,6 +126,47 @@ _RK4_C = (0.0, 0.5, 0.5, 1.0)
 _RK4_W = (1.0, 2.0, 2.0, 1.0)
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def _stage_state(q: F64, dq: F64, h: float, s: F64, stage: int) -> None:  # pragma: no cover
+    """The state of RK4 stage ``stage`` into ``s[0], s[1]`` (``qs, vs``), formed in
+    place from the previous stage's: ``qs = q + c vs`` before ``vs = dq + c acc``."""
+    qs, vs, acc = s[0], s[1], s[2]
+    if stage == 0:
+        for r in range(q.shape[0]):
+            qs[r] = q[r]
+            vs[r] = dq[r]
+    else:
+        c = _RK4_C[stage] * h
+        for r in range(q.shape[0]):
+            qs[r] = q[r] + c * vs[r]
+            vs[r] = dq[r] + c * acc[r]
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _stage_sum(s: F64, stage: int) -> None:  # pragma: no cover - compiled
+    """Add stage ``stage``'s rates ``s[1], s[2]`` to the weighted sums ``s[3], s[4]``
+    (the first stage starts them)."""
+    vs, acc, sum_v, sum_a = s[1], s[2], s[3], s[4]
+    if stage == 0:
+        for r in range(vs.shape[0]):
+            sum_v[r] = vs[r]
+            sum_a[r] = acc[r]
+    else:
+        w = _RK4_W[stage]
+        for r in range(vs.shape[0]):
+            sum_v[r] += w * vs[r]
+            sum_a[r] += w * acc[r]
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _rk4_update(q: F64, dq: F64, h: float, s: F64) -> None:  # pragma: no cover - compiled
+    c6 = h / 6.0
+    sum_v, sum_a = s[3], s[4]
+    for r in range(q.shape[0]):
+        q[r] += c6 * sum_v[r]
+        dq[r] += c6 * sum_a[r]
+
+
 @njit_runtime_free(cache=True, nogil=True)
 def _rk4(
     q: F64, dq: F64, tau: F64, h: float, model: ArmArrays, ws: Workspace, s: F64
@@ -131,33 +174,31 @@ def _rk4(
     """One classical RK4 step of ``qdd = f(q, dq, tau)`` in place; ``s`` is (6, n) scratch.
 
     The four stages run in a loop with a single call of the dynamics, so the
-    (inlined) kernel is compiled once.
+    (inlined) kernel is compiled once. This is the general kernel;
+    :func:`_rk4_two_links_one_mode` is the same step for the paper's structure.
     """
-    n = q.shape[0]
-    qs, vs, acc = s[0], s[1], s[2]
-    sum_v, sum_a, v_prev = s[3], s[4], s[5]
-    for r in range(n):
-        sum_v[r] = 0.0
-        sum_a[r] = 0.0
     for stage in range(4):
-        c = _RK4_C[stage] * h
-        for r in range(n):
-            if stage == 0:
-                qs[r] = q[r]
-                vs[r] = dq[r]
-            else:
-                qs[r] = q[r] + c * v_prev[r]
-                vs[r] = dq[r] + c * acc[r]
-        forward_dynamics(qs, vs, tau, model, ws, acc)
-        w = _RK4_W[stage]
-        for r in range(n):
-            sum_v[r] += w * vs[r]
-            sum_a[r] += w * acc[r]
-            v_prev[r] = vs[r]
-    c6 = h / 6.0
-    for r in range(n):
-        q[r] += c6 * sum_v[r]
-        dq[r] += c6 * sum_a[r]
+        _stage_state(q, dq, h, s, stage)
+        forward_dynamics_general(s[0], s[1], tau, model, ws, s[2])
+        _stage_sum(s, stage)
+    _rk4_update(q, dq, h, s)
+
+
+@njit_runtime_free(cache=True, nogil=True)
+def _rk4_two_links_one_mode(
+    q: F64, dq: F64, tau: F64, h: float, model: ArmArrays, s: F64
+) -> None:  # pragma: no cover - compiled
+    """:func:`_rk4` with the scalar kernel of two links with one mode each and rigid
+    joints (:func:`flexarm.kernels.forward_dynamics_two_links_one_mode`).
+
+    A function of its own rather than a branch in :func:`_rk4`: Numba inlines
+    each kernel into one function only, which keeps the first compilation short.
+    """
+    for stage in range(4):
+        _stage_state(q, dq, h, s, stage)
+        forward_dynamics_two_links_one_mode(s[0], s[1], tau, model, s[2])
+        _stage_sum(s, stage)
+    _rk4_update(q, dq, h, s)
 
 
 @njit_runtime_free(cache=True, nogil=True)
@@ -205,6 +246,7 @@ def run(
     order = sensor.pade_ad.shape[0]
     has_noise = sensor.noise.shape[0] > 0
     joint_sensor = sensor.link[0] < 0
+    two_links_one_mode = is_two_links_one_mode(model)
     for k in range(k0, k1):
         # ---- measure: the delayed sensed signal, then noise and quantisation
         sense(q, dq, model, sensor, raw)
@@ -307,7 +349,10 @@ def run(
                         x_new[j] = acc
                     for j in range(order):
                         state.pade_x[c, j] = x_new[j]
-            _rk4(q, dq, tau, h, model, ws, state.scratch)
+            if two_links_one_mode:
+                _rk4_two_links_one_mode(q, dq, tau, h, model, state.scratch)
+            else:
+                _rk4(q, dq, tau, h, model, ws, state.scratch)
             state.cursor[0] += 1
             if n_buf > 1:
                 sense(q, dq, model, sensor, raw)

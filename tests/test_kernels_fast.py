@@ -1,0 +1,146 @@
+"""The compiled kernels' two paths against the NumPy reference.
+
+:func:`flexarm.kernels.forward_dynamics` takes a scalar kernel for two links with
+one mode each and rigid joints, and the general kernel otherwise. Both are held
+here to :meth:`flexarm.FlexibleArm.forward_dynamics` (``backend="numpy"``, the
+independent oracle) on arms that exercise every term of the scalar kernel (hub
+mass, payload mass and inertia, other boundary conditions, damping), and the two
+RK4 steps of the simulation loop are held to each other.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import flexarm as fa
+from flexarm import kernels, simloop
+from flexarm.joints import MakkarFriction, NonlinearJoint
+
+TWO_BY_ONE = {
+    "paper": lambda: fa.FlexibleArm.paper(),
+    "hubs": lambda: fa.FlexibleArm([fa.Link(4.5, 1676.0, 0.335, n_modes=1, hub_inertia=3.0)] * 2),
+    "hub-mass-payload": lambda: fa.FlexibleArm(
+        [
+            fa.Link(1.3, 4.0, 0.9, n_modes=1, hub_mass=0.3),
+            fa.Link(0.9, 2.5, 0.5, n_modes=1, hub_mass=0.7, hub_inertia=0.1),
+        ],
+        payload_mass=0.4,
+        payload_inertia=0.05,
+    ),
+    "clamped-mass": lambda: fa.FlexibleArm(
+        [fa.Link(1.3, 4.0, 0.9, n_modes=1, hub_mass=0.3), fa.Link(0.9, 2.5, 0.5, n_modes=1)],
+        payload_mass=0.4,
+        payload_inertia=0.05,
+        boundary="clamped-mass",
+    ),
+    "payload-inertia-damped": lambda: fa.FlexibleArm(
+        [fa.Link(1.3, 4.0, 0.9, n_modes=1), fa.Link(0.9, 2.5, 0.5, n_modes=1, modal_damping=0.1)],
+        payload_inertia=0.05,
+    ),
+}
+
+OTHERS = {
+    "paper-2modes": lambda: fa.FlexibleArm.paper(n_modes=2),
+    "rigid": lambda: fa.FlexibleArm([fa.Link(1.0, 1.0, 1.0, n_modes=0)] * 2),
+    "mixed": lambda: fa.FlexibleArm(
+        [fa.Link(1.0, 5.0, 1.1, n_modes=2), fa.Link(0.8, 2.0, 0.6, n_modes=1, hub_mass=0.5)]
+    ),
+    "paper-joints": lambda: fa.FlexibleArm.paper(
+        joints=[NonlinearJoint.default(MakkarFriction.default())] * 2
+    ),
+}
+
+
+def random_state(arm: fa.FlexibleArm, rng: np.random.Generator):
+    """Angles in [-pi, pi], tip deflections ~ 0.1 L, rates ~ 1 rad/s and ~ L/s;
+    motor angles (if any) near their links."""
+    q = np.empty(arm.n_dof)
+    dq = rng.normal(size=arm.n_dof)
+    q[: arm.n_links] = rng.uniform(-np.pi, np.pi, arm.n_links)
+    for i, (lk, bm) in enumerate(zip(arm.links, arm.modes, strict=True)):
+        s = arm.modal_slice(i)
+        if lk.n_modes:
+            unit = lk.length / np.abs(bm.tip_deflection)
+            q[s] = rng.normal(size=lk.n_modes) * 0.1 * unit
+            dq[s] *= unit
+    if arm.has_flexible_joints:
+        q[arm.motor_slice] = q[: arm.n_links] + rng.normal(size=arm.n_links) * 0.05
+    return q, dq
+
+
+def _call(kernel, arm, q, dq, tau):
+    ddq = np.empty(arm.n_dof)
+    ws = kernels.make_workspace(arm.n_dof)
+    if kernel is kernels.forward_dynamics_two_links_one_mode:
+        kernel(q, dq, tau, arm.arrays, ddq)
+    else:
+        kernel(q, dq, tau, arm.arrays, ws, ddq)
+    return ddq
+
+
+@pytest.mark.parametrize("name", sorted(TWO_BY_ONE))
+@pytest.mark.parametrize(
+    "kernel",
+    [
+        kernels.forward_dynamics,
+        kernels.forward_dynamics_general,
+        kernels.forward_dynamics_two_links_one_mode,
+    ],
+    ids=["dispatch", "general", "scalar"],
+)
+def test_two_links_one_mode_paths_match_numpy(name, kernel):
+    arm = TWO_BY_ONE[name]()
+    assert kernels.is_two_links_one_mode(arm.arrays)
+    rng = np.random.default_rng(11)
+    for _ in range(10):
+        q, dq = random_state(arm, rng)
+        tau = rng.normal(size=arm.n_links)
+        ref = arm.forward_dynamics(q, dq, tau, backend="numpy")
+        got = _call(kernel, arm, q, dq, tau)
+        np.testing.assert_allclose(got, ref, rtol=1e-10, atol=1e-10 * np.abs(ref).max())
+
+
+@pytest.mark.parametrize("name", sorted(OTHERS))
+def test_general_path_matches_numpy(name):
+    arm = OTHERS[name]()
+    assert not kernels.is_two_links_one_mode(arm.arrays)
+    rng = np.random.default_rng(12)
+    ws = kernels.make_workspace(arm.n_dof)
+    for _ in range(10):
+        q, dq = random_state(arm, rng)
+        tau = rng.normal(size=arm.n_links)
+        ref = arm.forward_dynamics(q, dq, tau, backend="numpy")
+        got = _call(kernels.forward_dynamics, arm, q, dq, tau)
+        np.testing.assert_allclose(got, ref, rtol=1e-10, atol=1e-10 * np.abs(ref).max())
+        kernels.mass_and_bias(q, dq, arm.arrays, ws)
+        np.testing.assert_allclose(ws.mass, arm.mass_matrix(q), rtol=1e-12, atol=1e-12)
+        h = arm.velocity_terms(q, dq)
+        np.testing.assert_allclose(ws.bias, h, rtol=1e-12, atol=1e-12 * np.abs(h).max())
+
+
+def test_local_order_is_link_major():
+    arm = OTHERS["mixed"]()  # q = (th1, th2, d1_1, d1_2, d2_1)
+    np.testing.assert_array_equal(
+        kernels.local_order(arm.arrays.mode_start, arm.n_dof), [0, 2, 3, 1, 4]
+    )
+    arm = OTHERS["paper-joints"]()  # q = (th1, th2, d1, d2, qm1, qm2)
+    np.testing.assert_array_equal(
+        kernels.local_order(arm.arrays.mode_start, arm.n_dof), [0, 2, 1, 3, 4, 5]
+    )
+
+
+@pytest.mark.parametrize("name", sorted(TWO_BY_ONE))
+def test_rk4_steps_of_both_paths_agree(name):
+    arm = TWO_BY_ONE[name]()
+    rng = np.random.default_rng(13)
+    q, dq = random_state(arm, rng)
+    tau = rng.normal(size=arm.n_links)
+    n = arm.n_dof
+    q1, dq1, q2, dq2 = q.copy(), dq.copy(), q.copy(), dq.copy()
+    h = 1e-3
+    for _ in range(20):
+        simloop._rk4(q1, dq1, tau, h, arm.arrays, kernels.make_workspace(n), np.zeros((6, n)))
+        simloop._rk4_two_links_one_mode(q2, dq2, tau, h, arm.arrays, np.zeros((6, n)))
+    np.testing.assert_allclose(q2, q1, rtol=1e-12, atol=1e-12 * np.abs(q1).max())
+    np.testing.assert_allclose(dq2, dq1, rtol=1e-10, atol=1e-10 * np.abs(dq1).max())
