@@ -91,9 +91,13 @@ def _collocated(q: F64, dq: F64, model: ArmArrays, i: int, n_links: int) -> tupl
     return q[i], dq[i]
 
 
-@njit_runtime_free(cache=True, nogil=True)
+@nb.njit(cache=True, nogil=True, inline="always")
 def sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> None:
-    """The raw (true, undelayed) sensed signal."""
+    """The raw (true, undelayed) sensed signal.
+
+    Inlined where :func:`run` calls it (the model's and the sensor's arrays would
+    otherwise be passed through a call at every control step).
+    """
     n_links = model.link.shape[0]
     link = sensor.link[0]
     if link < 0:
@@ -184,15 +188,16 @@ def _rk4(
     _rk4_update(q, dq, h, s)
 
 
-@njit_runtime_free(cache=True, nogil=True)
+@nb.njit(cache=True, nogil=True, inline="always")
 def _rk4_two_links_one_mode(
     q: F64, dq: F64, tau: F64, h: float, model: ArmArrays, s: F64
 ) -> None:  # pragma: no cover - compiled
     """:func:`_rk4` with the scalar kernel of two links with one mode each and rigid
     joints (:func:`flexarm.kernels.forward_dynamics_two_links_one_mode`).
 
-    A function of its own rather than a branch in :func:`_rk4`: Numba inlines
-    each kernel into one function only, which keeps the first compilation short.
+    Inlined into :func:`run`, so a step passes no arrays through a call; kept
+    apart from :func:`_rk4` (which :func:`run` calls) so that each kernel is
+    inlined into one function only, which keeps the first compilation short.
     """
     for stage in range(4):
         _stage_state(q, dq, h, s, stage)
