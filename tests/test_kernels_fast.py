@@ -141,6 +141,6 @@ def test_rk4_steps_of_both_paths_agree(name):
     h = 1e-3
     for _ in range(20):
         simloop._rk4(q1, dq1, tau, h, arm.arrays, kernels.make_workspace(n), np.zeros((6, n)))
-        simloop._rk4_two_links_one_mode(q2, dq2, tau, h, arm.arrays, np.zeros((6, n)))
+        simloop._rk4_two_links_one_mode(q2, dq2, tau, h, arm.arrays)
     np.testing.assert_allclose(q2, q1, rtol=1e-12, atol=1e-12 * np.abs(q1).max())
     np.testing.assert_allclose(dq2, dq1, rtol=1e-10, atol=1e-10 * np.abs(dq1).max())

@@ -32,6 +32,7 @@ __all__ = [
     "RUNTIME_FREE",
     "ArmArrays",
     "Workspace",
+    "accelerations_two_links_one_mode",
     "forward_dynamics",
     "forward_dynamics_general",
     "forward_dynamics_two_links_one_mode",
@@ -482,29 +483,53 @@ def is_two_links_one_mode(model: ArmArrays) -> bool:  # pragma: no cover - compi
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def forward_dynamics_two_links_one_mode(
-    q: F64, dq: F64, tau: F64, model: ArmArrays, ddq: F64
-) -> None:  # pragma: no cover - compiled
+def accelerations_two_links_one_mode(
+    a1: float,
+    a2: float,
+    d1: float,
+    d2: float,
+    da1: float,
+    da2: float,
+    dd1: float,
+    dd2: float,
+    tau1: float,
+    tau2: float,
+    model: ArmArrays,
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
     """:func:`forward_dynamics` of a two-link arm with one mode per link and rigid
     joints (the paper's structure), in scalars.
 
     This is :func:`_assemble_local` and :func:`_ldlt_solve` written out for that
     structure, in the same local order ``(theta1, delta1, theta2, delta2)``:
-    every intermediate stays in a register and there is no loop, which takes
-    the call from about 270 to about 100 ns. Hub mass, payload and any mode
-    shape (the modal integrals) are covered; :func:`forward_dynamics` falls back
-    to the general kernel for other structures.
+    every intermediate stays in a register and there is no loop. Hub mass,
+    payload and any mode shape (the modal integrals) are covered;
+    :func:`forward_dynamics` falls back to the general kernel for other
+    structures.
+
+    Parameters
+    ----------
+    a1, a2, d1, d2 : float
+        ``q = (theta1, theta2, delta1, delta2)``.
+    da1, da2, dd1, dd2 : float
+        ``dq``, in the same order.
+    tau1, tau2 : float
+        Joint torques, N m.
+    model : ArmArrays
+        Must satisfy :func:`is_two_links_one_mode`.
+
+    Returns
+    -------
+    tuple of 4 float
+        ``ddq``, in the order of ``q``.
     """
     lk = model.link
     v, w = model.mass_integral, model.moment_integral
     tdef, tslope, md = model.tip_deflection, model.tip_slope, model.modal_mass
-    d1, d2 = q[2], q[3]
-    dd1, dd2 = dq[2], dq[3]
     v0, v1, w0, w1 = v[2], v[3], w[2], w[3]
     t0, t1, g0, g1 = tdef[2], tdef[3], tslope[2], tslope[3]
     md0, md1 = md[2, 2], md[3, 3]
     # ---- link 0: A = (1, 0, 0, 0), U = 0, no velocity forces at its joint
-    ad = dq[0]
+    ad = da1
     ad2 = ad * ad
     vd = v0 * d1
     e = t0 * d1
@@ -519,7 +544,7 @@ def forward_dynamics_two_links_one_mode(
     bx = -ad2 * lk[0, LEN] - 2.0 * ad * (t0 * dd1)
     by = -ad2 * e
     # ---- frame change to link 1: gamma = theta2 + tip slope of link 0
-    gamma = q[1] + g0 * d1
+    gamma = a2 + g0 * d1
     cg, sg = np.cos(gamma), np.sin(gamma)
     u00, u10 = cg * u00 + sg * u10, -sg * u00 + cg * u10
     u01, u11 = sg * u11, cg * u11
@@ -531,7 +556,7 @@ def forward_dynamics_two_links_one_mode(
         m00 += mh * (u00 * u00 + u10 * u10)
         m10 += mh * (u01 * u00 + u11 * u10)
         m11 += mh * (u01 * u01 + u11 * u11)
-    ad += g0 * dd1 + dq[1]
+    ad += g0 * dd1 + da2
     ad2 = ad * ad
     # ---- link 1: A = (1, g0, 1, 0), U column theta2 = 0
     mass, cx = lk[1, MASS], lk[1, STATIC]
@@ -584,9 +609,9 @@ def forward_dynamics_two_links_one_mode(
         m33 += mp * (u13 * u13) + jp * g1 * g1
     # ---- right-hand side, local order (theta1, delta1, theta2, delta2)
     k, c = model.stiffness, model.damping
-    y0 = tau[0] - k[0] * q[0] - c[0] * dq[0] - h0
+    y0 = tau1 - k[0] * a1 - c[0] * da1 - h0
     y1 = -k[2] * d1 - c[2] * dd1 - h1
-    y2 = tau[1] - k[1] * q[1] - c[1] * dq[1] - h2
+    y2 = tau2 - k[1] * a2 - c[1] * da2 - h2
     y3 = -k[3] * d2 - c[3] * dd2 - h3
     # ---- M = L D L', then L z = y, x = D^-1 z - L' x
     i0 = 1.0 / m00
@@ -606,10 +631,17 @@ def forward_dynamics_two_links_one_mode(
     x2 = z2 * i2 - l32 * x3
     x1 = z1 * i1 - l21 * x2 - l31 * x3
     x0 = y0 * i0 - l10 * x1 - l20 * x2 - l30 * x3
-    ddq[0] = x0
-    ddq[1] = x2
-    ddq[2] = x1
-    ddq[3] = x3
+    return x0, x2, x1, x3
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def forward_dynamics_two_links_one_mode(
+    q: F64, dq: F64, tau: F64, model: ArmArrays, ddq: F64
+) -> None:  # pragma: no cover - compiled
+    """:func:`accelerations_two_links_one_mode` on arrays: ``ddq`` from ``q, dq, tau``."""
+    ddq[0], ddq[1], ddq[2], ddq[3] = accelerations_two_links_one_mode(
+        q[0], q[1], q[2], q[3], dq[0], dq[1], dq[2], dq[3], tau[0], tau[1], model
+    )
 
 
 @nb.njit(cache=True, nogil=True, inline="always")

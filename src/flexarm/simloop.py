@@ -24,8 +24,8 @@ from .kernels import (
     LEN,
     ArmArrays,
     Workspace,
+    accelerations_two_links_one_mode,
     forward_dynamics_general,
-    forward_dynamics_two_links_one_mode,
     is_two_links_one_mode,
     njit_runtime_free,
     point_kinematics,
@@ -190,20 +190,42 @@ def _rk4(
 
 @nb.njit(cache=True, nogil=True, inline="always")
 def _rk4_two_links_one_mode(
-    q: F64, dq: F64, tau: F64, h: float, model: ArmArrays, s: F64
+    q: F64, dq: F64, tau: F64, h: float, model: ArmArrays
 ) -> None:  # pragma: no cover - compiled
-    """:func:`_rk4` with the scalar kernel of two links with one mode each and rigid
-    joints (:func:`flexarm.kernels.forward_dynamics_two_links_one_mode`).
+    """:func:`_rk4` for two links with one mode each and rigid joints, in scalars
+    (:func:`flexarm.kernels.accelerations_two_links_one_mode`): the stage states
+    and sums stay in registers. Same operations in the same order as :func:`_rk4`.
 
     Inlined into :func:`run`, so a step passes no arrays through a call; kept
     apart from :func:`_rk4` (which :func:`run` calls) so that each kernel is
     inlined into one function only, which keeps the first compilation short.
     """
+    q0, q1, q2, q3 = q[0], q[1], q[2], q[3]
+    v0, v1, v2, v3 = dq[0], dq[1], dq[2], dq[3]
+    t0, t1 = tau[0], tau[1]
+    qs0, qs1, qs2, qs3 = q0, q1, q2, q3
+    vs0, vs1, vs2, vs3 = v0, v1, v2, v3
+    a0 = a1 = a2 = a3 = 0.0
+    sv0 = sv1 = sv2 = sv3 = 0.0
+    sa0 = sa1 = sa2 = sa3 = 0.0
     for stage in range(4):
-        _stage_state(q, dq, h, s, stage)
-        forward_dynamics_two_links_one_mode(s[0], s[1], tau, model, s[2])
-        _stage_sum(s, stage)
-    _rk4_update(q, dq, h, s)
+        if stage > 0:
+            c = _RK4_C[stage] * h
+            qs0, qs1, qs2, qs3 = q0 + c * vs0, q1 + c * vs1, q2 + c * vs2, q3 + c * vs3
+            vs0, vs1, vs2, vs3 = v0 + c * a0, v1 + c * a1, v2 + c * a2, v3 + c * a3
+        a0, a1, a2, a3 = accelerations_two_links_one_mode(
+            qs0, qs1, qs2, qs3, vs0, vs1, vs2, vs3, t0, t1, model
+        )
+        if stage == 0:
+            sv0, sv1, sv2, sv3 = vs0, vs1, vs2, vs3
+            sa0, sa1, sa2, sa3 = a0, a1, a2, a3
+        else:
+            w = _RK4_W[stage]
+            sv0, sv1, sv2, sv3 = sv0 + w * vs0, sv1 + w * vs1, sv2 + w * vs2, sv3 + w * vs3
+            sa0, sa1, sa2, sa3 = sa0 + w * a0, sa1 + w * a1, sa2 + w * a2, sa3 + w * a3
+    c6 = h / 6.0
+    q[0], q[1], q[2], q[3] = q0 + c6 * sv0, q1 + c6 * sv1, q2 + c6 * sv2, q3 + c6 * sv3
+    dq[0], dq[1], dq[2], dq[3] = v0 + c6 * sa0, v1 + c6 * sa1, v2 + c6 * sa2, v3 + c6 * sa3
 
 
 @njit_runtime_free(cache=True, nogil=True)
@@ -355,7 +377,7 @@ def run(
                     for j in range(order):
                         state.pade_x[c, j] = x_new[j]
             if two_links_one_mode:
-                _rk4_two_links_one_mode(q, dq, tau, h, model, state.scratch)
+                _rk4_two_links_one_mode(q, dq, tau, h, model)
             else:
                 _rk4(q, dq, tau, h, model, ws, state.scratch)
             state.cursor[0] += 1
