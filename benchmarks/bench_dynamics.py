@@ -11,10 +11,21 @@ modes per link):
 
 ``kernel, compiled loop``
     :func:`flexarm.kernels.forward_dynamics` called ``--calls`` times from a
-    ``@numba.njit`` driver loop, the way the simulator calls it. The driver
+    compiled driver loop, the way the simulator calls it (inlined, compiled
+    without the refcount runtime like :mod:`flexarm.simloop`). The driver
     cycles through a table of random states, so every call sees a new state and
     nothing can be hoisted out of the loop; the loop's own cost (an index mask
-    and three array views, about 1 ns) is included.
+    and three array views, about 1 ns) is included. Successive calls are
+    independent, so the CPU may overlap one call with the next.
+``kernel, dependent calls``
+    The same, but each call's ``q`` is the table's plus ``1e-300 * qddot`` of the
+    previous call (a copy of ``n_dof`` numbers), so a call cannot start before
+    the previous one ends, as in the stages of an RK4 step: the latency of a
+    call rather than its throughput.
+``general kernel, dependent calls`` (two links with one mode each only)
+    :func:`flexarm.kernels.forward_dynamics_general`, the kernel every other
+    structure takes, on the same states: what the scalar kernel of this
+    structure saves.
 ``kernel, Python call``
     The same kernel called from a Python ``for`` loop with a preallocated
     workspace: Numba's dispatch overhead included.
@@ -48,7 +59,6 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-import numba as nb
 import numpy as np
 
 from _machine import machine_info, print_machine
@@ -117,7 +127,7 @@ def measure(run_batch: Callable[[], int], repeat: int) -> dict[str, Any]:
     }
 
 
-@nb.njit(nogil=True)
+@kernels.njit_runtime_free(nogil=True)
 def _driver(Q, DQ, TAU, model, ws, ddq, n_calls):  # pragma: no cover - compiled
     """``n_calls`` kernel calls from compiled code, cycling through the state table."""
     mask = Q.shape[0] - 1
@@ -129,13 +139,46 @@ def _driver(Q, DQ, TAU, model, ws, ddq, n_calls):  # pragma: no cover - compiled
     return acc
 
 
-def bench_compiled_loop(arm: FlexibleArm, states: tuple, calls: int, repeat: int) -> dict:
+def _make_chained_driver(kernel: Any) -> Any:
+    """A driver of dependent calls of ``kernel``: each call's ``q`` depends on the
+    previous call's ``qddot``."""
+
+    @kernels.njit_runtime_free(nogil=True)
+    def driver(Q, DQ, TAU, model, ws, ddq, qs, n_calls):  # pragma: no cover - compiled
+        mask = Q.shape[0] - 1
+        acc = 0.0
+        for i in range(n_calls):
+            j = i & mask
+            for r in range(qs.shape[0]):
+                qs[r] = Q[j, r] + 1e-300 * ddq[r]
+            kernel(qs, DQ[j], TAU[j], model, ws, ddq)
+            acc += ddq[0]
+        return acc
+
+    return driver
+
+
+_chained = _make_chained_driver(kernels.forward_dynamics)
+_chained_general = _make_chained_driver(kernels.forward_dynamics_general)
+
+
+def bench_compiled_loop(
+    arm: FlexibleArm, states: tuple, calls: int, repeat: int, driver: str = "independent"
+) -> dict:
+    """``calls`` kernel calls per batch from a compiled driver: ``driver`` is
+    ``"independent"``, ``"dependent"`` or ``"dependent-general"``."""
     Q, DQ, TAU = states
-    model, ws, ddq = arm.arrays, kernels.make_workspace(arm.n_dof), np.empty(arm.n_dof)
+    model, ws, ddq = arm.arrays, kernels.make_workspace(arm.n_dof), np.zeros(arm.n_dof)
+    qs = np.zeros(arm.n_dof)
     sink = []
 
     def batch() -> int:
-        sink.append(_driver(Q, DQ, TAU, model, ws, ddq, calls))
+        if driver == "independent":
+            sink.append(_driver(Q, DQ, TAU, model, ws, ddq, calls))
+        elif driver == "dependent":
+            sink.append(_chained(Q, DQ, TAU, model, ws, ddq, qs, calls))
+        else:
+            sink.append(_chained_general(Q, DQ, TAU, model, ws, ddq, qs, calls))
         return calls
 
     res = measure(batch, repeat)
@@ -251,6 +294,7 @@ def run(calls: int, repeat: int, log: Callable[[str], None]) -> dict[str, Any]:
 
         res[label] = {
             "kernel, compiled loop": bench_compiled_loop(arm, states, calls, repeat),
+            "kernel, dependent calls": bench_compiled_loop(arm, states, calls, repeat, "dependent"),
             "kernel, Python call": bench_python_loop(kernel_call, rows, py_calls, repeat),
             "arm.forward_dynamics compiled": bench_python_loop(
                 method("compiled"), rows, py_calls, repeat
@@ -259,6 +303,10 @@ def run(calls: int, repeat: int, log: Callable[[str], None]) -> dict[str, Any]:
                 method("numpy"), rows, np_calls, repeat
             ),
         }
+        if kernels.is_two_links_one_mode(model):
+            res[label]["general kernel, dependent calls"] = bench_compiled_loop(
+                arm, states, calls, repeat, "dependent-general"
+            )
 
     rigid = "rigid 2-link (n_dof 2)"
     log("timing the Python loop harness ...")

@@ -59,6 +59,12 @@ What is timed:
     (the loop in C). ``pip install mujoco``; skipped with a note if it is not
     importable.
 
+``first compilation`` (``--compile-time`` only)
+    A fresh interpreter with an empty Numba cache (``NUMBA_CACHE_DIR`` set to a
+    new temporary directory) imports flexarm and runs a 10 ms ``simulate`` of
+    case B: the import, then the first call, which JIT-compiles the simulation
+    loop and everything it calls. Timed once.
+
 Every flexarm measurement is warmed up first (JIT compilation and disk-cache
 loading excluded) and timed ``--repeat`` times; the table gives the best and the
 median. The SciPy loop is timed ``--scipy-repeat`` times after a short warm-up.
@@ -77,7 +83,9 @@ import argparse
 import json
 import math
 import statistics
+import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 from typing import Any
@@ -174,6 +182,34 @@ def time_simulate(
 def _zero_torque(t, y, r, params, state, tau):  # pragma: no cover - compiled
     for i in range(tau.shape[0]):
         tau[i] = 0.0
+
+
+_COMPILE_SCRIPT = f"""
+import time
+t0 = time.perf_counter()
+from flexarm import FlexibleArm, Link
+from flexarm.simulate import simulate
+arm = FlexibleArm([Link({LENGTH}, {EI}, {RHO}, n_modes=1, hub_inertia={HUB_INERTIA})] * 2)
+t1 = time.perf_counter()
+simulate(arm, dt={DT_B}, duration=0.01, progress=False)
+print(t1 - t0, time.perf_counter() - t1)
+"""
+
+
+def time_first_compile() -> dict[str, float]:
+    """Import time and first ``simulate`` call (JIT compilation of the loop) of case B's
+    arm in a fresh interpreter whose Numba cache is empty, in seconds."""
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        res = subprocess.run(
+            [sys.executable, "-c", _COMPILE_SCRIPT],
+            env=env,
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+    t_import, t_first = (float(x) for x in res.stdout.split()[-2:])
+    return {"import_s": t_import, "first_simulate_s": t_first}
 
 
 # ------------------------------------------------------------ the SciPy peer
@@ -330,7 +366,11 @@ def time_mujoco(mujoco: Any, model: Any, repeat: int) -> dict[str, Any]:
 # ----------------------------------------------------------------- machine
 # -------------------------------------------------------------------- main
 def run(
-    repeat: int, scipy_repeat: int, horizon: float, log: Callable[[str], None]
+    repeat: int,
+    scipy_repeat: int,
+    horizon: float,
+    log: Callable[[str], None],
+    compile_time: bool = False,
 ) -> dict[str, Any]:
     try:
         import mujoco
@@ -349,6 +389,10 @@ def run(
         "substeps": 1,
         "mj_steps_per_batch": MJ_STEPS,
     }
+
+    if compile_time:
+        log("timing the first compilation (fresh interpreter, empty Numba cache) ...")
+        out["first_compilation"] = time_first_compile()
 
     # 1 kHz on the paper's arm is unstable: show it rather than assume it
     try:
@@ -472,6 +516,12 @@ def print_report(out: dict[str, Any]) -> None:
         f"{s['scipy_repeat']} runs over the first {s['scipy_horizon_s']} s"
     )
     print(f"paper arm at dt = 1e-3 s (1 kHz): {out['paper_arm_at_1kHz']}")
+    if "first_compilation" in out:
+        c = out["first_compilation"]
+        print(
+            f"first compilation (empty Numba cache): import {c['import_s']:.1f} s, first "
+            f"simulate() of case B {c['first_simulate_s']:.1f} s"
+        )
     for r in out["results"].values():
         fa, sp, d = r["flexarm"], r["scipy"], r["derived"]
         print()
@@ -583,6 +633,12 @@ def main(argv: list[str] | None = None) -> int:
         default=1.0,
         help="simulated seconds of the SciPy loop (it takes ~25 s per simulated s in case A)",
     )
+    p.add_argument(
+        "--compile-time",
+        action="store_true",
+        help="also time the first compilation in a fresh interpreter with an empty Numba "
+        "cache (adds about 30 s)",
+    )
     p.add_argument("--json", action="store_true", help="print the results as JSON only")
     args = p.parse_args(argv)
     if args.repeat < 1 or args.scipy_repeat < 1:
@@ -593,7 +649,7 @@ def main(argv: list[str] | None = None) -> int:
     def log(msg: str) -> None:
         print(msg, file=sys.stderr, flush=True)
 
-    out = run(args.repeat, args.scipy_repeat, args.scipy_horizon, log)
+    out = run(args.repeat, args.scipy_repeat, args.scipy_horizon, log, args.compile_time)
     if args.json:
         print(json.dumps(_jsonable(out), indent=2))
     else:
