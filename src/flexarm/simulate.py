@@ -71,10 +71,14 @@ def _joint_references(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Joint angles (inverse kinematics) and rates (``J dtheta = v``) of a path."""
     theta = arm.inverse_kinematics(position, elbow=elbow)
-    jac = arm.jacobian(theta)
-    a, b, c, d = jac[:, 0, 0], jac[:, 0, 1], jac[:, 1, 0], jac[:, 1, 1]
+    l1, l2 = arm.links[0].length, arm.links[1].length
+    phi1 = theta[:, 0]
+    phi2 = phi1 + theta[:, 1]
+    s1, c1, s2, c2 = np.sin(phi1), np.cos(phi1), np.sin(phi2), np.cos(phi2)
+    a, b = -l1 * s1 - l2 * s2, -l2 * s2  # the rigid Jacobian [[a, b], [c, d]]
+    c, d = l1 * c1 + l2 * c2, l2 * c2
     det = a * d - b * c
-    scale = arm.links[0].length * arm.links[1].length
+    scale = l1 * l2
     if np.any(np.abs(det) < 1e-6 * scale):
         k = int(np.argmin(np.abs(det)))
         raise ValueError(
