@@ -339,11 +339,11 @@ def simulate(
     # ------------------------------------------------------------ run
     params = np.ascontiguousarray(controller.parameters_for(arm, sensor), dtype=float)
     ny = measurement_size(N, sum(arm.n_modes))
-    out = {
-        "q": np.full((n_steps + 1, n), np.nan),
-        "dq": np.full((n_steps + 1, n), np.nan),
-        "tau": np.full((n_steps + 1, N), np.nan),
-        "measurement": np.full((n_steps + 1, ny), np.nan),
+    out = {  # every row up to the last one reached is written; the rest become NaN below
+        "q": np.empty((n_steps + 1, n)),
+        "dq": np.empty((n_steps + 1, n)),
+        "tau": np.empty((n_steps + 1, N)),
+        "measurement": np.empty((n_steps + 1, ny)),
         "tip": np.full((n_steps + 1, 2), np.nan),
     }
     state = simloop.LoopState(
@@ -399,8 +399,11 @@ def simulate(
         )
     info["wall_time_s"] = time.perf_counter() - start
     info["controller_state"] = state.ctrl_state.tolist()
-    done = np.all(np.isfinite(out["q"]), axis=1)
-    out["tip"][done] = arm.tip_position(out["q"][done])
+    for key in ("q", "dq", "tau", "measurement"):
+        out[key][k_end + 1 :] = np.nan
+    reached = out["q"][: k_end + 1]
+    done = np.all(np.isfinite(reached), axis=1)
+    out["tip"][: k_end + 1][done] = arm.tip_position(reached[done])
     info["status"] = "ok" if status == simloop.OK else "diverged"
     result = SimulationResult(
         t=t,
