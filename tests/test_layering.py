@@ -49,6 +49,7 @@ LAYERS = {
     # flexarm.ident: data -> estimators; needs only _validation.
     "ident": 2,
     "ident.kernels": 1,
+    "ident._params": 1,
     "ident.regression": 2,
     "ident.binning": 2,
     "ident.convergence": 2,

@@ -78,7 +78,6 @@ when first asked for after an update.
 
 from __future__ import annotations
 
-import inspect
 from dataclasses import dataclass, field
 from typing import Any, Self
 
@@ -87,6 +86,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_int, check_option, check_real
+from ._params import HyperParameters
 from .kernels import KERNELS
 from .regression import NotFittedError, SemiRecursiveKernelRegression
 from .systems import ARMA, spectral_radius
@@ -341,7 +341,7 @@ def _check_known_points(value: Any) -> tuple[tuple[float, float], tuple[float, f
     return (x1, f1), (x2, f2)
 
 
-class HammersteinIdentifier:
+class HammersteinIdentifier(HyperParameters):
     """Identify a Hammerstein system from input/output data (module docstring).
 
     Parameters
@@ -438,40 +438,6 @@ class HammersteinIdentifier:
         self.grid_size = grid_size
         self.known_points = known_points
         self.warmup = warmup
-
-    # ---------------------------------------------------------------- parameters
-
-    @classmethod
-    def _get_param_names(cls) -> list[str]:
-        sig = inspect.signature(cls.__init__)
-        return sorted(p.name for p in sig.parameters.values() if p.name != "self")
-
-    def get_params(self, deep: bool = True) -> dict[str, Any]:
-        """Return the hyperparameters as a dict (``deep`` is accepted for scikit-learn)."""
-        return {name: getattr(self, name) for name in self._get_param_names()}
-
-    def set_params(self, **params: Any) -> Self:
-        """Set hyperparameters by name and return ``self``; they are checked at fit time."""
-        valid = self._get_param_names()
-        for name, value in params.items():
-            if name not in valid:
-                raise ValueError(
-                    f"Invalid parameter {name!r} for estimator {_OWNER}. "
-                    f"Valid parameters are: {valid}."
-                )
-            setattr(self, name, value)
-        return self
-
-    def __repr__(self) -> str:
-        defaults = {
-            p.name: p.default
-            for p in inspect.signature(type(self).__init__).parameters.values()
-            if p.name != "self"
-        }
-        shown = [
-            f"{k}={v!r}" for k, v in self.get_params().items() if repr(v) != repr(defaults.get(k))
-        ]
-        return f"{_OWNER}({', '.join(shown)})"
 
     def _validated(self) -> dict[str, Any]:
         """The hyperparameters, checked (called by the first fit / partial_fit)."""

@@ -81,7 +81,6 @@ known only there.
 from __future__ import annotations
 
 import copy
-import inspect
 import math
 import os
 from typing import Any, ClassVar, Self
@@ -93,6 +92,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._io import atomic_path
 from .._validation import check_array, check_option, check_real
 from . import binning
+from ._params import HyperParameters, same_value
 from .kernels import (
     KERNELS,
     SERIES_REACH,
@@ -271,22 +271,7 @@ def _ratio(num: F64, den: F64) -> F64:  # pragma: no cover - compiled
 # --------------------------------------------------------------------------- estimators
 
 
-def _same(a: Any, b: Any) -> bool:
-    """Equality for hyperparameter values that may be arrays."""
-    if a is b:
-        return True
-    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
-        try:
-            return bool(np.array_equal(np.asarray(a), np.asarray(b)))
-        except Exception:  # pragma: no cover - incomparable values
-            return False
-    try:
-        return bool(a == b)
-    except Exception:  # pragma: no cover - incomparable values
-        return False
-
-
-class _KernelRegression:
+class _KernelRegression(HyperParameters):
     """Shared implementation; see the module docstring for the design."""
 
     _recursive: ClassVar[bool] = False
@@ -295,41 +280,6 @@ class _KernelRegression:
     kernel: Any
     bandwidth: Any
     grid: Any
-
-    # ---------------------------------------------------------------- parameters
-
-    @classmethod
-    def _get_param_names(cls) -> list[str]:
-        sig = inspect.signature(cls.__init__)
-        return sorted(p.name for p in sig.parameters.values() if p.name != "self")
-
-    def get_params(self, deep: bool = True) -> dict[str, Any]:
-        """Return the hyperparameters as a dict (``deep`` is accepted for scikit-learn)."""
-        return {name: getattr(self, name) for name in self._get_param_names()}
-
-    def set_params(self, **params: Any) -> Self:
-        """Set hyperparameters by name and return ``self``; they are checked at fit time."""
-        valid = self._get_param_names()
-        for name, value in params.items():
-            if name not in valid:
-                raise ValueError(
-                    f"Invalid parameter {name!r} for estimator {type(self).__name__}. "
-                    f"Valid parameters are: {valid}."
-                )
-            setattr(self, name, value)
-        return self
-
-    def __repr__(self) -> str:
-        defaults = {
-            p.name: p.default
-            for p in inspect.signature(type(self).__init__).parameters.values()
-            if p.name != "self"
-        }
-        with np.printoptions(threshold=6, edgeitems=2):
-            shown = [
-                f"{k}={v!r}" for k, v in self.get_params().items() if not _same(v, defaults.get(k))
-            ]
-        return f"{type(self).__name__}({', '.join(shown)})"
 
     # ---------------------------------------------------------------- validation
 
@@ -609,7 +559,7 @@ class _KernelRegression:
                     "X", f"of {self.n_features_in_} column(s) as before", f"{Xa.shape[1]}"
                 )
             now = self.get_params()
-            changed = sorted(k for k in now if not _same(now[k], self._frozen[k]))
+            changed = sorted(k for k in now if not same_value(now[k], self._frozen[k]))
             if changed:
                 raise ValueError(
                     f"The {changed} parameter(s) of {self._owner} changed since the first "
