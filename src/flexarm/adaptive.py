@@ -30,7 +30,6 @@ range of ``ks``.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -44,6 +43,7 @@ from .controllers import (
     CONTROL_SIGNATURE,
     Controller,
     _gain_matrix,
+    jacobian_transpose_law,
     operational_lengths,
 )
 from .fuzzy import CompiledFuzzySystem, FuzzySystem, evaluate_into, paper_system, workspace_size
@@ -138,22 +138,7 @@ def _fuzzy_jt_pd(
     g = lam / lam0
     s[0] = lam
     s[1] = g
-    gp = g if law == 0.0 else 1.0
-    gd = g
-    px, py = y[2 * n], y[2 * n + 1]
-    vx, vy = y[2 * n + 2], y[2 * n + 3]
-    ex, ey = r[0] - px, r[1] - py
-    evx, evy = r[2] - vx, r[3] - vy
-    fx = gp * (p[0] * ex + p[1] * ey) + gd * (p[4] * evx + p[5] * evy)
-    fy = gp * (p[2] * ex + p[3] * ey) + gd * (p[6] * evx + p[7] * evy)
-    phi = 0.0
-    for i in range(n):
-        tau[i] = 0.0
-    for i in range(n):
-        phi += y[i]
-        contrib = -p[8 + i] * math.sin(phi) * fx + p[8 + i] * math.cos(phi) * fy
-        for k in range(i + 1):
-            tau[k] += contrib
+    jacobian_transpose_law(y, r, p, g if law == 0.0 else 1.0, g, tau)
 
 
 @nb.cfunc(CONTROL_SIGNATURE, cache=True)

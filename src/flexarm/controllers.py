@@ -49,6 +49,7 @@ __all__ = [
     "Controller",
     "JacobianTransposePD",
     "JointPD",
+    "jacobian_transpose_law",
     "operational_lengths",
     "wrap_control_function",
 ]
@@ -89,17 +90,20 @@ def _joint_pd(
         tau[i] = p[i] * (r[6 + i] - y[i]) + p[n + i] * (r[6 + n + i] - y[n + i])
 
 
-@njit_runtime_free(cache=True, nogil=True)
-def _jacobian_transpose_pd(
-    t: float, y: F64, r: F64, p: F64, s: F64, tau: F64
-) -> None:  # pragma: no cover
+@nb.njit(cache=True, nogil=True, inline="always")
+def jacobian_transpose_law(
+    y: F64, r: F64, p: F64, stiffness: float, damping: float, tau: F64
+) -> None:  # pragma: no cover - compiled
+    """``tau = J' [stiffness Kp e + damping Kd de]`` with the :class:`JacobianTransposePD`
+    parameter layout (``Kp``, ``Kd`` row-major in ``p[0:8]``, lever lengths in
+    ``p[8:8+N]``); the scale factors let adaptive laws reuse it."""
     n = tau.shape[0]
     px, py = y[2 * n], y[2 * n + 1]
     vx, vy = y[2 * n + 2], y[2 * n + 3]
     ex, ey = r[0] - px, r[1] - py
     evx, evy = r[2] - vx, r[3] - vy
-    fx = p[0] * ex + p[1] * ey + p[4] * evx + p[5] * evy
-    fy = p[2] * ex + p[3] * ey + p[6] * evx + p[7] * evy
+    fx = stiffness * (p[0] * ex + p[1] * ey) + damping * (p[4] * evx + p[5] * evy)
+    fy = stiffness * (p[2] * ex + p[3] * ey) + damping * (p[6] * evx + p[7] * evy)
     # rigid Jacobian: column k = sum_{i >= k} L_i (-sin phi_i, cos phi_i)
     phi = 0.0
     for i in range(n):
@@ -111,6 +115,13 @@ def _jacobian_transpose_pd(
         contrib = jx * fx + jy * fy
         for k in range(i + 1):
             tau[k] += contrib
+
+
+@njit_runtime_free(cache=True, nogil=True)
+def _jacobian_transpose_pd(
+    t: float, y: F64, r: F64, p: F64, s: F64, tau: F64
+) -> None:  # pragma: no cover - compiled
+    jacobian_transpose_law(y, r, p, 1.0, 1.0, tau)
 
 
 @nb.cfunc(CONTROL_SIGNATURE, cache=True)

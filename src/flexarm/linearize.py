@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ._validation import check_array, check_option, check_real
 from .controllers import Controller
-from .sensors import JointSensor, PointSensor, TipSensor
+from .sensors import check_sensor
 from .signals import measurement_size, reference_size
 
 __all__ = ["closed_loop_matrix", "closed_loop_poles"]
@@ -114,12 +114,7 @@ def closed_loop_matrix(
             f"The 'controller' parameter of {_OWNER} must be a flexarm Controller. "
             f"Got {type(controller).__name__} instead."
         )
-    sensor = JointSensor() if sensor is None else sensor
-    if not isinstance(sensor, JointSensor | PointSensor | TipSensor):
-        raise TypeError(
-            f"The 'sensor' parameter of {_OWNER} must be a JointSensor, PointSensor or "
-            f"TipSensor. Got {type(sensor).__name__} instead."
-        )
+    sensor = check_sensor(sensor, _OWNER)
     target = check_array(position, "position", _OWNER, shape=(2,))
     check_option(elbow, "elbow", _OWNER, ("positive", "negative"))
     step = check_real(step, "step", _OWNER, positive=True)

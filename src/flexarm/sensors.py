@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from ._validation import check_int, check_real, validate_real_fields
 
-__all__ = ["JointSensor", "PointSensor", "Sensor", "TipSensor", "parse_sensor"]
+__all__ = ["JointSensor", "PointSensor", "Sensor", "TipSensor", "check_sensor", "parse_sensor"]
 
 _NOISE_FIELDS = ("noise_std", "rate_noise_std", "quantization", "rate_quantization")
 
@@ -149,6 +149,19 @@ class TipSensor:
 
 
 Sensor = JointSensor | PointSensor | TipSensor
+
+
+def check_sensor(sensor: Any, owner: str) -> Sensor:
+    """``sensor``, or :class:`JointSensor` () for ``None``; a TypeError naming ``owner`` else."""
+    if sensor is None:
+        return JointSensor()
+    if not isinstance(sensor, JointSensor | PointSensor | TipSensor):
+        raise TypeError(
+            f"The 'sensor' parameter of {owner} must be a JointSensor, PointSensor or "
+            f"TipSensor. Got {type(sensor).__name__} instead."
+        )
+    return sensor
+
 
 _POINT = re.compile(r"^point:(?P<link>[^:]+):(?P<distance>[^:]+)$")
 

@@ -37,7 +37,7 @@ from ._validation import check_array, check_int, check_option, check_real
 from .controllers import Controller, JacobianTransposePD
 from .delays import DelayModel, discretize, pade_state_space
 from .results import SimulationResult
-from .sensors import JointSensor, PointSensor, Sensor, TipSensor
+from .sensors import Sensor, check_sensor
 from .signals import measurement_size, reference_size
 from .trajectories import Square
 
@@ -201,12 +201,7 @@ def simulate(
                 f"The 'trajectory' parameter of {_OWNER} must have '{attr}'. "
                 f"Got {type(trajectory).__name__} instead."
             )
-    sensor = JointSensor() if sensor is None else sensor
-    if not isinstance(sensor, JointSensor | PointSensor | TipSensor):
-        raise TypeError(
-            f"The 'sensor' parameter of {_OWNER} must be a JointSensor, PointSensor or "
-            f"TipSensor. Got {type(sensor).__name__} instead."
-        )
+    sensor = check_sensor(sensor, _OWNER)
     delay = DelayModel.none() if delay is None else delay
     if not isinstance(delay, DelayModel):
         raise TypeError(
