@@ -30,7 +30,7 @@ import json
 import os
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -300,48 +300,40 @@ class Reproduction:
             for row in rows:
                 writer.writerow({k: "" if v is None else v for k, v in row.items()})
 
-    def _grid(self, fig: Any) -> tuple[Any, list[list[Any]]]:
+    def _panels(self, fig: Any) -> Iterator[tuple[Any, CaseResult]]:
+        """One axes per case of the matrix (controllers by rows, sensors by columns),
+        titled with the case's outcome."""
         grid = fig.add_gridspec(len(CONTROLLER_KINDS), len(SENSOR_CASES))
-        return grid, [[None] * len(SENSOR_CASES) for _ in CONTROLLER_KINDS]
-
-    def _matrix_case(self, controller: str, sensor: str) -> CaseResult:
-        return next(
-            c for c in self.cases if c.case.controller == controller and c.case.sensor == sensor
-        )
-
-    def plot_tracking(self, fig: Any) -> Any:
-        """XY path of the end effector against the square, one panel per case."""
-        grid, _ = self._grid(fig)
         for i, ctrl in enumerate(CONTROLLER_KINDS):
             for j, sensor in enumerate(SENSOR_CASES):
                 ax = fig.add_subplot(grid[i, j])
-                c = self._matrix_case(ctrl, sensor)
-                r = c.result
-                ax.plot(r.desired[:, 0], r.desired[:, 1], "k--", lw=1, label="reference")
-                ax.plot(r.tip[:, 0], r.tip[:, 1], lw=1.2, label="end effector")
-                ax.set_aspect("equal", adjustable="datalim")
-                ax.set_title(_panel_title(c), fontsize=9)
-                ax.set_xlabel("x (m)")
-                ax.set_ylabel("y (m)")
-                if i == 0 and j == 0:
-                    ax.legend(fontsize=8, loc="best")
+                case = next(
+                    c for c in self.cases if c.case.controller == ctrl and c.case.sensor == sensor
+                )
+                ax.set_title(_panel_title(case), fontsize=9)
+                yield ax, case
+
+    def plot_tracking(self, fig: Any) -> Any:
+        """XY path of the end effector against the square, one panel per case."""
+        for ax, c in self._panels(fig):
+            r = c.result
+            ax.plot(r.desired[:, 0], r.desired[:, 1], "k--", lw=1, label="reference")
+            ax.plot(r.tip[:, 0], r.tip[:, 1], lw=1.2, label="end effector")
+            ax.set_aspect("equal", adjustable="datalim")
+            ax.set_xlabel("x (m)")
+            ax.set_ylabel("y (m)")
+        fig.axes[0].legend(fontsize=8, loc="best")
         return fig
 
     def plot_deflections(self, fig: Any) -> Any:
         """Tip deflection of each link against time, one panel per case."""
-        grid, _ = self._grid(fig)
-        for i, ctrl in enumerate(CONTROLLER_KINDS):
-            for j, sensor in enumerate(SENSOR_CASES):
-                ax = fig.add_subplot(grid[i, j])
-                c = self._matrix_case(ctrl, sensor)
-                d = c.result.link_deflections
-                for k in range(d.shape[1]):
-                    ax.plot(c.result.t, 1e3 * d[:, k], lw=1, label=f"link {k + 1}")
-                ax.set_title(_panel_title(c), fontsize=9)
-                ax.set_xlabel("t (s)")
-                ax.set_ylabel("tip deflection (mm)")
-                if i == 0 and j == 0:
-                    ax.legend(fontsize=8)
+        for ax, c in self._panels(fig):
+            d = c.result.link_deflections
+            for k in range(d.shape[1]):
+                ax.plot(c.result.t, 1e3 * d[:, k], lw=1, label=f"link {k + 1}")
+            ax.set_xlabel("t (s)")
+            ax.set_ylabel("tip deflection (mm)")
+        fig.axes[0].legend(fontsize=8)
         return fig
 
     def plot_surface(self, fig: Any) -> Any:
