@@ -10,9 +10,9 @@ What is timed, per arm (rigid two-link, the paper's arm with one and with two
 modes per link):
 
 ``kernel, compiled loop``
-    :func:`flexarm.kernels.forward_dynamics` called ``--calls`` times from a
+    :func:`flexarm.model.dynamics.forward_dynamics` called ``--calls`` times from a
     compiled driver loop, the way the simulator calls it (inlined, compiled
-    without the refcount runtime like :mod:`flexarm.simloop`). The driver
+    without the refcount runtime like :mod:`flexarm.sim.loop`). The driver
     cycles through a table of random states, so every call sees a new state and
     nothing can be hoisted out of the loop; the loop's own cost (an index mask
     and three array views, about 1 ns) is included. Successive calls are
@@ -23,7 +23,7 @@ modes per link):
     the previous one ends, as in the stages of an RK4 step: the latency of a
     call rather than its throughput.
 ``general kernel, dependent calls`` (two links with one mode each only)
-    :func:`flexarm.kernels.forward_dynamics_general`, the kernel every other
+    :func:`flexarm.model.dynamics.forward_dynamics_general`, the kernel every other
     structure takes, on the same states: what the scalar kernel of this
     structure saves.
 ``kernel, Python call``
@@ -62,7 +62,8 @@ from typing import Any
 import numpy as np
 
 from _machine import machine_info, print_machine
-from flexarm import FlexibleArm, Link, MakkarFriction, NonlinearJoint, kernels
+from flexarm import FlexibleArm, Link, MakkarFriction, NonlinearJoint
+from flexarm.model import dynamics
 
 N_STATES = 1024  # states cycled by the compiled driver (power of two)
 N_PY_STATES = 256  # states cycled by the Python-level loops
@@ -127,14 +128,14 @@ def measure(run_batch: Callable[[], int], repeat: int) -> dict[str, Any]:
     }
 
 
-@kernels.njit_runtime_free(nogil=True)
+@dynamics.njit_runtime_free(nogil=True)
 def _driver(Q, DQ, TAU, model, ws, ddq, n_calls):  # pragma: no cover - compiled
     """``n_calls`` kernel calls from compiled code, cycling through the state table."""
     mask = Q.shape[0] - 1
     acc = 0.0
     for i in range(n_calls):
         j = i & mask
-        kernels.forward_dynamics(Q[j], DQ[j], TAU[j], model, ws, ddq)
+        dynamics.forward_dynamics(Q[j], DQ[j], TAU[j], model, ws, ddq)
         acc += ddq[0]
     return acc
 
@@ -143,7 +144,7 @@ def _make_chained_driver(kernel: Any) -> Any:
     """A driver of dependent calls of ``kernel``: each call's ``q`` depends on the
     previous call's ``qddot``."""
 
-    @kernels.njit_runtime_free(nogil=True)
+    @dynamics.njit_runtime_free(nogil=True)
     def driver(Q, DQ, TAU, model, ws, ddq, qs, n_calls):  # pragma: no cover - compiled
         mask = Q.shape[0] - 1
         acc = 0.0
@@ -158,8 +159,8 @@ def _make_chained_driver(kernel: Any) -> Any:
     return driver
 
 
-_chained = _make_chained_driver(kernels.forward_dynamics)
-_chained_general = _make_chained_driver(kernels.forward_dynamics_general)
+_chained = _make_chained_driver(dynamics.forward_dynamics)
+_chained_general = _make_chained_driver(dynamics.forward_dynamics_general)
 
 
 def bench_compiled_loop(
@@ -168,7 +169,7 @@ def bench_compiled_loop(
     """``calls`` kernel calls per batch from a compiled driver: ``driver`` is
     ``"independent"``, ``"dependent"`` or ``"dependent-general"``."""
     Q, DQ, TAU = states
-    model, ws, ddq = arm.arrays, kernels.make_workspace(arm.n_dof), np.zeros(arm.n_dof)
+    model, ws, ddq = arm.arrays, dynamics.make_workspace(arm.n_dof), np.zeros(arm.n_dof)
     qs = np.zeros(arm.n_dof)
     sink = []
 
@@ -276,18 +277,18 @@ def run(calls: int, repeat: int, log: Callable[[str], None]) -> dict[str, Any]:
         log(f"timing {label} ...")
         states = random_states(arm, N_STATES, rng)
         rows = _py_rows(states)
-        model, ws, ddq = arm.arrays, kernels.make_workspace(arm.n_dof), np.empty(arm.n_dof)
+        model, ws, ddq = arm.arrays, dynamics.make_workspace(arm.n_dof), np.empty(arm.n_dof)
 
         # the compiled kernel agrees with the NumPy reference on these states
         err = 0.0
         for q0, dq0, tau0 in rows[:16]:
-            kernels.forward_dynamics(q0, dq0, tau0, model, ws, ddq)
+            dynamics.forward_dynamics(q0, dq0, tau0, model, ws, ddq)
             ref = arm.forward_dynamics(q0, dq0, tau0, backend="numpy")
             err = max(err, float(np.max(np.abs(ddq - ref) / (1.0 + np.abs(ref)))))
         out["checks"][f"{label}: kernel vs numpy (max rel err)"] = err
 
         def kernel_call(q, dq, tau, model=model, ws=ws, ddq=ddq):
-            kernels.forward_dynamics(q, dq, tau, model, ws, ddq)
+            dynamics.forward_dynamics(q, dq, tau, model, ws, ddq)
 
         def method(backend, arm=arm):
             return lambda q, dq, tau: arm.forward_dynamics(q, dq, tau, backend=backend)
@@ -303,7 +304,7 @@ def run(calls: int, repeat: int, log: Callable[[str], None]) -> dict[str, Any]:
                 method("numpy"), rows, np_calls, repeat
             ),
         }
-        if kernels.is_two_links_one_mode(model):
+        if dynamics.is_two_links_one_mode(model):
             res[label]["general kernel, dependent calls"] = bench_compiled_loop(
                 arm, states, calls, repeat, "dependent-general"
             )

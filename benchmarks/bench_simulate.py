@@ -8,7 +8,7 @@ Run from the repository root::
 
 The scenario is the paper's: two links with one mode each, Jacobian-transpose PD
 with the paper's gains (``JacobianTransposePD.from_arm(arm)``), joint sensor, the
-default 20 s square (:class:`flexarm.trajectories.Square`), zero-order hold,
+default 20 s square (:class:`flexarm.control.trajectories.Square`), zero-order hold,
 one RK4 step per control period (``substeps=1``). Two cases:
 
 ``A``  ``simulate(FlexibleArm.paper())`` as the library runs it by default, with
@@ -33,7 +33,7 @@ What is timed:
     ``result.info["wall_time_s"]``: the compiled loop inside that call.
 ``flexarm, loop with a zero-torque controller`` (1 and 2 RK4 substeps)
     The same call with the controller replaced by a trivial zero-torque
-    :class:`flexarm.controllers.CompiledController` (the arm then stays at rest),
+    :class:`flexarm.control.controllers.CompiledController` (the arm then stays at rest),
     loop time only, with ``substeps=1`` and ``substeps=2``. The difference of the
     two is one more RK4 step of the plant (four dynamics calls and the divergence
     check) per control period: the plant's share of a step, measured inside the
@@ -96,9 +96,9 @@ from scipy.integrate import solve_ivp
 
 from _machine import machine_info, print_machine
 from flexarm import FlexibleArm, Link
-from flexarm.controllers import CompiledController, JacobianTransposePD
-from flexarm.simulate import SimulationError, simulate
-from flexarm.trajectories import Square
+from flexarm.control.controllers import CompiledController, JacobianTransposePD
+from flexarm.control.trajectories import Square
+from flexarm.sim.simulate import SimulationError, simulate
 
 LENGTH, EI, RHO = 4.5, 1676.0, 0.335  # the paper's links (Sasiadek et al. 2014)
 HUB_INERTIA = 3.0  # kg m**2 at both joints in case B (not in the paper)
@@ -188,7 +188,7 @@ _COMPILE_SCRIPT = f"""
 import time
 t0 = time.perf_counter()
 from flexarm import FlexibleArm, Link
-from flexarm.simulate import simulate
+from flexarm.sim.simulate import simulate
 arm = FlexibleArm([Link({LENGTH}, {EI}, {RHO}, n_modes=1, hub_inertia={HUB_INERTIA})] * 2)
 t1 = time.perf_counter()
 simulate(arm, dt={DT_B}, duration=0.01, progress=False)
@@ -217,7 +217,7 @@ def scipy_closed_loop(arm: FlexibleArm, dt: float, horizon: float) -> dict[str, 
     """The paper's closed loop written straightforwardly with NumPy and ``solve_ivp``:
     JT-PD on the joint angles' rigid kinematics, zero-order hold, RK45 (default
     tolerances) over each control period, the NumPy dynamics in the right-hand side.
-    Starts, like :func:`flexarm.simulate.simulate`, at rest and undeflected on the
+    Starts, like :func:`flexarm.sim.simulate.simulate`, at rest and undeflected on the
     square's first point (positive elbow)."""
     ctrl = JacobianTransposePD.from_arm(arm)
     kp = float(ctrl.kp) * np.eye(2)

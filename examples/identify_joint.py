@@ -10,7 +10,7 @@ encoder, rate, current and accelerometer signals the script identifies
 * the friction curve ``f(v)`` (link-side torque balance over a sliding window),
 * a Hammerstein model from the command to the link acceleration,
 
-and compares each with the truth. See :mod:`flexarm.joint_identification`.
+and compares each with the truth. See :mod:`flexarm.studies.joint_identification`.
 Run from the repository root::
 
     python examples/identify_joint.py                      # 60 s experiment
@@ -22,7 +22,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from flexarm.joint_identification import JointExcitation, identify_joint
+from flexarm.studies.joint_identification import JointExcitation, identify_joint
 
 
 def main(argv: list[str] | None = None) -> int:

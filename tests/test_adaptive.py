@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 import flexarm as fa
-from flexarm.adaptive import FuzzyAdaptiveJTPD, tip_deflections
-from flexarm.controllers import JacobianTransposePD
+from flexarm.control.adaptive import FuzzyAdaptiveJTPD, tip_deflections
+from flexarm.control.controllers import JacobianTransposePD
 from flexarm.fuzzy import FuzzySystem, Rule, Triangle, Variable, paper_system
-from flexarm.scenario import Scenario, ScenarioError
-from flexarm.simulate import simulate
+from flexarm.sim.scenario import Scenario, ScenarioError
+from flexarm.sim.simulate import simulate
 
 
 @pytest.fixture(scope="module")

@@ -187,12 +187,12 @@ def test_compiled_kernel_matches_numpy_reference(arm):
 
 
 def test_compiled_mass_and_bias_match_numpy(arm):
-    from flexarm import kernels
+    from flexarm.model import dynamics
 
     rng = np.random.default_rng(6)
-    ws = kernels.make_workspace(arm.n_dof)
+    ws = dynamics.make_workspace(arm.n_dof)
     q, dq = random_state(arm, rng)
-    kernels.mass_and_bias(q, dq, arm.arrays, ws)
+    dynamics.mass_and_bias(q, dq, arm.arrays, ws)
     np.testing.assert_allclose(ws.mass, arm.mass_matrix(q), rtol=1e-12, atol=1e-12)
     h = arm.velocity_terms(q, dq)
     np.testing.assert_allclose(ws.bias, h, rtol=1e-12, atol=1e-12 * np.abs(h).max())

@@ -15,11 +15,11 @@ import pytest
 
 import flexarm as fa
 from flexarm.cli import main
-from flexarm.delays import SEED_WAVE_SPEED, bending_group_speed, travel_delay
-from flexarm.joints import MakkarFriction
-from flexarm.results import SimulationResult
-from flexarm.scenario import Scenario, ScenarioError, apply_overrides, load_scenario
-from flexarm.simulate import simulate
+from flexarm.model.joints import MakkarFriction
+from flexarm.sensing.delays import SEED_WAVE_SPEED, bending_group_speed, travel_delay
+from flexarm.sim.results import SimulationResult
+from flexarm.sim.scenario import Scenario, ScenarioError, apply_overrides, load_scenario
+from flexarm.sim.simulate import simulate
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "paper_square.toml"

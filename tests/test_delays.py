@@ -1,4 +1,4 @@
-"""Tests of :mod:`flexarm.delays` against hand-written coefficients and independent oracles.
+"""Tests of :mod:`flexarm.sensing.delays` against hand-written coefficients and independent oracles.
 
 Oracles (none calls the code under test to produce the expected value):
 
@@ -24,7 +24,8 @@ import pytest
 import scipy.linalg as sla
 from scipy import signal
 
-from flexarm.delays import (
+from flexarm.modes import BeamModes
+from flexarm.sensing.delays import (
     SEED_WAVE_SPEED,
     DelayModel,
     bending_group_speed,
@@ -35,7 +36,6 @@ from flexarm.delays import (
     travel_delay,
     wave_delay,
 )
-from flexarm.modes import BeamModes
 
 EI_ARM, RHO_ARM, L_ARM = 1676.0, 0.335, 4.5  # spec §1
 ORDERS = tuple(range(1, 9))

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import flexarm
-from flexarm.joint_identification import (
+from flexarm.studies.joint_identification import (
     DriveNonlinearity,
     JointExcitation,
     JointSensors,

@@ -12,7 +12,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import flexarm as fa
-from flexarm.joints import LinearJoint, MakkarFriction, NonlinearJoint
+from flexarm.model.joints import LinearJoint, MakkarFriction, NonlinearJoint
 
 
 def simulate(arm, x0, t_end, torque=None, n_eval=201, rtol=1e-11, atol=1e-12):

@@ -1,6 +1,6 @@
 """The compiled kernels' two paths against the NumPy reference.
 
-:func:`flexarm.kernels.forward_dynamics` takes a scalar kernel for two links with
+:func:`flexarm.model.dynamics.forward_dynamics` takes a scalar kernel for two links with
 one mode each and rigid joints, and the general kernel otherwise. Both are held
 here to :meth:`flexarm.FlexibleArm.forward_dynamics` (``backend="numpy"``, the
 independent oracle) on arms that exercise every term of the scalar kernel (hub
@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 
 import flexarm as fa
-from flexarm import kernels, simloop
-from flexarm.joints import MakkarFriction, NonlinearJoint
+from flexarm.model import dynamics
+from flexarm.model.joints import MakkarFriction, NonlinearJoint
+from flexarm.sim import loop
 
 TWO_BY_ONE = {
     "paper": lambda: fa.FlexibleArm.paper(),
@@ -71,8 +72,8 @@ def random_state(arm: fa.FlexibleArm, rng: np.random.Generator):
 
 def _call(kernel, arm, q, dq, tau):
     ddq = np.empty(arm.n_dof)
-    ws = kernels.make_workspace(arm.n_dof)
-    if kernel is kernels.forward_dynamics_two_links_one_mode:
+    ws = dynamics.make_workspace(arm.n_dof)
+    if kernel is dynamics.forward_dynamics_two_links_one_mode:
         kernel(q, dq, tau, arm.arrays, ddq)
     else:
         kernel(q, dq, tau, arm.arrays, ws, ddq)
@@ -83,15 +84,15 @@ def _call(kernel, arm, q, dq, tau):
 @pytest.mark.parametrize(
     "kernel",
     [
-        kernels.forward_dynamics,
-        kernels.forward_dynamics_general,
-        kernels.forward_dynamics_two_links_one_mode,
+        dynamics.forward_dynamics,
+        dynamics.forward_dynamics_general,
+        dynamics.forward_dynamics_two_links_one_mode,
     ],
     ids=["dispatch", "general", "scalar"],
 )
 def test_two_links_one_mode_paths_match_numpy(name, kernel):
     arm = TWO_BY_ONE[name]()
-    assert kernels.is_two_links_one_mode(arm.arrays)
+    assert dynamics.is_two_links_one_mode(arm.arrays)
     rng = np.random.default_rng(11)
     for _ in range(10):
         q, dq = random_state(arm, rng)
@@ -104,16 +105,16 @@ def test_two_links_one_mode_paths_match_numpy(name, kernel):
 @pytest.mark.parametrize("name", sorted(OTHERS))
 def test_general_path_matches_numpy(name):
     arm = OTHERS[name]()
-    assert not kernels.is_two_links_one_mode(arm.arrays)
+    assert not dynamics.is_two_links_one_mode(arm.arrays)
     rng = np.random.default_rng(12)
-    ws = kernels.make_workspace(arm.n_dof)
+    ws = dynamics.make_workspace(arm.n_dof)
     for _ in range(10):
         q, dq = random_state(arm, rng)
         tau = rng.normal(size=arm.n_links)
         ref = arm.forward_dynamics(q, dq, tau, backend="numpy")
-        got = _call(kernels.forward_dynamics, arm, q, dq, tau)
+        got = _call(dynamics.forward_dynamics, arm, q, dq, tau)
         np.testing.assert_allclose(got, ref, rtol=1e-10, atol=1e-10 * np.abs(ref).max())
-        kernels.mass_and_bias(q, dq, arm.arrays, ws)
+        dynamics.mass_and_bias(q, dq, arm.arrays, ws)
         np.testing.assert_allclose(ws.mass, arm.mass_matrix(q), rtol=1e-12, atol=1e-12)
         h = arm.velocity_terms(q, dq)
         np.testing.assert_allclose(ws.bias, h, rtol=1e-12, atol=1e-12 * np.abs(h).max())
@@ -122,11 +123,11 @@ def test_general_path_matches_numpy(name):
 def test_local_order_is_link_major():
     arm = OTHERS["mixed"]()  # q = (th1, th2, d1_1, d1_2, d2_1)
     np.testing.assert_array_equal(
-        kernels.local_order(arm.arrays.mode_start, arm.n_dof), [0, 2, 3, 1, 4]
+        dynamics.local_order(arm.arrays.mode_start, arm.n_dof), [0, 2, 3, 1, 4]
     )
     arm = OTHERS["paper-joints"]()  # q = (th1, th2, d1, d2, qm1, qm2)
     np.testing.assert_array_equal(
-        kernels.local_order(arm.arrays.mode_start, arm.n_dof), [0, 2, 1, 3, 4, 5]
+        dynamics.local_order(arm.arrays.mode_start, arm.n_dof), [0, 2, 1, 3, 4, 5]
     )
 
 
@@ -140,7 +141,7 @@ def test_rk4_steps_of_both_paths_agree(name):
     q1, dq1, q2, dq2 = q.copy(), dq.copy(), q.copy(), dq.copy()
     h = 1e-3
     for _ in range(20):
-        simloop._rk4(q1, dq1, tau, h, arm.arrays, kernels.make_workspace(n), np.zeros((6, n)))
-        simloop._rk4_two_links_one_mode(q2, dq2, tau, h, arm.arrays)
+        loop._rk4(q1, dq1, tau, h, arm.arrays, dynamics.make_workspace(n), np.zeros((6, n)))
+        loop._rk4_two_links_one_mode(q2, dq2, tau, h, arm.arrays)
     np.testing.assert_allclose(q2, q1, rtol=1e-12, atol=1e-12 * np.abs(q1).max())
     np.testing.assert_allclose(dq2, dq1, rtol=1e-10, atol=1e-10 * np.abs(dq1).max())

@@ -1,4 +1,10 @@
-"""Data flows one way: lower layers never import upper ones; modules declare __all__."""
+"""The package layout is the data flow: lower layers never import upper ones.
+
+parameters -> models -> simulator <- controllers, sensors, references -> results
+-> metrics, plots, reports; data -> estimators -> identified model. Each top-level
+package is one layer; packages of one layer are independent of each other; inside
+a package, modules are ordered too. Every module declares ``__all__``.
+"""
 
 from __future__ import annotations
 
@@ -9,111 +15,127 @@ import pytest
 
 SRC = pathlib.Path(__file__).resolve().parents[1] / "src" / "flexarm"
 
-# Lower number = lower layer. A module may import only modules of its own layer or below.
-LAYERS = {
-    "_validation": 0,
-    "_io": 0,
-    "modes": 1,
-    "link": 1,
-    "joints": 1,
-    "fuzzy": 1,
-    "fuzzy.sets": 1,
-    "fuzzy.compiled": 1,
-    "fuzzy.system": 1,
-    "fuzzy.paper": 1,
-    "kernels": 2,
-    "signals": 0,
-    "trajectories": 1,
-    "shapers": 1,
-    "delays": 1,
-    "metrics": 1,
-    "arm": 3,
-    "sensors": 4,
-    "controllers": 4,
-    "adaptive": 4,
-    "results": 4,
-    "simloop": 4,
-    "simulate": 5,
-    "linearize": 5,
-    "scenario": 6,
-    "reproduce": 7,
-    "cli": 9,
-    "cli._common": 8,
-    "cli.modes": 9,
-    "cli.simulate": 9,
-    "cli.identify": 9,
-    "cli._hammerstein": 9,
-    "cli.reproduce": 9,
-    "__main__": 9,
-    "__init__": 9,
-    # flexarm.ident: data -> estimators; needs only _validation.
-    "ident": 2,
-    "ident.kernels": 1,
-    "ident._params": 1,
-    "ident.regression": 2,
-    "ident.binning": 2,
-    "ident.convergence": 2,
-    "ident.systems": 1,
-    "ident.hammerstein": 2,
-    "joint_identification": 6,
+# Layers, lowest first. A module may import its own package and the packages of
+# lower layers; packages of the same layer (e.g. model, fuzzy, ident) do not import
+# each other.
+LAYERS: list[tuple[str, ...]] = [
+    ("_version", "_validation", "_io", "errors"),  # shared checks, atomic output, error types
+    ("model", "fuzzy", "ident"),  # the plant; fuzzy inference; estimators from data
+    ("sensing",),  # what a controller can see: sensors and transport delays
+    ("control",),  # references, shapers, control laws, linear analysis
+    ("sim",),  # the simulator, its results and metrics, scenario files
+    ("studies",),  # the paper's reproduction, the robot-joint identification study
+    ("cli",),  # the command line
+    ("__main__", "__init__", "modes"),  # the package's entry points and facades
+]
+RANK = {name: k for k, names in enumerate(LAYERS) for name in names}
+
+# Inside a package: a module may import the modules listed before it (or its own
+# package's __init__ when that is lower still). Packages not listed are unordered.
+WITHIN: dict[str, list[str]] = {
+    "model": ["modes", "link", "joints", "dynamics", "arm"],
+    "sensing": ["delays", "sensors"],
+    "control": ["signals", "trajectories", "shapers", "controllers", "adaptive", "linearize"],
+    "sim": ["metrics", "results", "loop", "simulate", "scenario"],
+    "fuzzy": ["sets", "compiled", "system", "paper"],
+    "ident": [
+        "_params",
+        "kernels",
+        "binning",
+        "systems",
+        "regression",
+        "hammerstein",
+        "convergence",
+    ],
 }
 
 
 def module_name(path: pathlib.Path) -> str:
-    """Dotted name below flexarm: "arm", "ident" (a package's __init__), "ident.kernels"."""
+    """Dotted name below flexarm: "model.arm", "ident" (a package's __init__)."""
     parts = list(path.relative_to(SRC).with_suffix("").parts)
     if parts[-1] == "__init__" and len(parts) > 1:
         parts.pop()
     return ".".join(parts)
 
 
-def _known(dotted: str) -> str:
-    """The longest prefix of ``dotted`` with a layer (``ident.kernels.x`` -> ``ident.kernels``)."""
-    parts = dotted.split(".")
-    for k in range(len(parts), 0, -1):
-        if ".".join(parts[:k]) in LAYERS:
-            return ".".join(parts[:k])
-    return parts[0]
-
-
 def flexarm_imports(path: pathlib.Path) -> set[str]:
-    """Layer names of the flexarm modules ``path`` imports, relative imports resolved."""
+    """Dotted names (below flexarm) of the flexarm modules ``path`` imports."""
     package = list(path.relative_to(SRC).parent.parts)
-    tree = ast.parse(path.read_text())
     found = set()
-    for node in ast.walk(tree):
+    for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.ImportFrom):
             if node.level >= 1:
                 base = package[: len(package) - (node.level - 1)]
                 if node.module:
-                    found.add(_known(".".join([*base, node.module])))
-                else:
-                    found.update(_known(".".join([*base, a.name])) for a in node.names)
+                    found.add(".".join([*base, node.module]))
+                else:  # "from . import x": x is a module, or a name of the package
+                    for a in node.names:
+                        here = SRC.joinpath(*base, a.name)
+                        is_module = here.is_dir() or here.with_suffix(".py").is_file()
+                        found.add(".".join([*base, a.name] if is_module else base) or "__init__")
             elif node.module and node.module.startswith("flexarm"):
                 rest = node.module.split(".")[1:]
-                found.add(_known(".".join(rest)) if rest else "__init__")
+                found.add(".".join(rest) if rest else "__init__")
         elif isinstance(node, ast.Import):
             for a in node.names:
                 if a.name.startswith("flexarm."):
-                    found.add(_known(a.name.split(".", 1)[1]))
-    return found
+                    found.add(a.name.split(".", 1)[1])
+    return {name for name in found if name}
+
+
+def allowed(importer: str, imported: str) -> bool:
+    """Whether module ``importer`` may import ``imported`` (dotted, below flexarm)."""
+    top_a, top_b = importer.split(".")[0], imported.split(".")[0]
+    if top_a != top_b:
+        return RANK[top_b] < RANK[top_a]
+    order = WITHIN.get(top_a)
+    if order is None or "." not in importer or "." not in imported:
+        return True  # unordered package, or its __init__ (which gathers the package)
+    a, b = importer.split(".")[1], imported.split(".")[1]
+    if b not in order:
+        return False
+    return a not in order or order.index(b) <= order.index(a)
 
 
 MODULES = sorted(p for p in SRC.rglob("*.py") if "__pycache__" not in p.parts)
 
 
-def test_every_module_has_a_layer():
-    missing = [module_name(p) for p in MODULES if module_name(p) not in LAYERS]
+def test_every_package_has_a_layer():
+    missing = sorted({module_name(p).split(".")[0] for p in MODULES} - set(RANK))
     assert not missing, f"assign a layer in tests/test_layering.py: {missing}"
+
+
+def test_every_module_of_an_ordered_package_is_placed():
+    missing = [
+        module_name(p)
+        for p in MODULES
+        if "." in module_name(p)
+        and module_name(p).split(".")[0] in WITHIN
+        and module_name(p).split(".")[1] not in WITHIN[module_name(p).split(".")[0]]
+    ]
+    assert not missing, f"place these in WITHIN in tests/test_layering.py: {missing}"
 
 
 @pytest.mark.parametrize("path", MODULES, ids=module_name)
 def test_no_upward_imports(path):
-    name_ = module_name(path)
-    layer = LAYERS[name_]
-    for name in flexarm_imports(path):
-        if name in LAYERS and name not in ("__init__", name_):
-            assert LAYERS[name] <= layer, f"{name_} (layer {layer}) imports {name}"
+    name = module_name(path)
+    for imported in flexarm_imports(path):
+        assert allowed(name, imported), f"{name} imports {imported}: an upward import"
+
+
+@pytest.mark.parametrize(
+    ("importer", "imported", "ok"),
+    [
+        ("sim.simulate", "model.dynamics", True),
+        ("model.arm", "sim.loop", False),  # upward across packages
+        ("model.arm", "fuzzy", False),  # peers of one layer
+        ("model.modes", "model.arm", False),  # upward inside a package
+        ("model.arm", "model.modes", True),
+        ("cli", "studies.reproduction", True),
+    ],
+)
+def test_the_rule_itself(importer, imported, ok):
+    assert allowed(importer, imported) is ok
 
 
 @pytest.mark.parametrize("path", [p for p in MODULES if p.stem != "__main__"], ids=module_name)
@@ -122,8 +144,14 @@ def test_module_declares_all(path):
     names = {
         t.id
         for node in tree.body
-        if isinstance(node, ast.Assign)
-        for t in node.targets
+        if isinstance(node, ast.Assign | ast.AnnAssign)
+        for t in (node.targets if isinstance(node, ast.Assign) else [node.target])
         if isinstance(t, ast.Name)
     }
     assert "__all__" in names
+
+
+@pytest.mark.parametrize("path", MODULES, ids=module_name)
+def test_modules_are_short_enough_to_read(path):
+    n = len(path.read_text().splitlines())
+    assert n <= 650, f"{module_name(path)} has {n} lines: split it by concept"

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 import flexarm as fa
-from flexarm.controllers import JacobianTransposePD, JointPD
-from flexarm.linearize import closed_loop_matrix, closed_loop_poles
-from flexarm.sensors import JointSensor, PointSensor, TipSensor
-from flexarm.simulate import SimulationError, simulate
-from flexarm.trajectories import Line
+from flexarm.control.controllers import JacobianTransposePD, JointPD
+from flexarm.control.linearize import closed_loop_matrix, closed_loop_poles
+from flexarm.control.trajectories import Line
+from flexarm.sensing.sensors import JointSensor, PointSensor, TipSensor
+from flexarm.sim.simulate import SimulationError, simulate
 
 L1, L2, RHO, HUB = 1.2, 0.9, 2.0, 0.05
 
@@ -42,9 +42,7 @@ def rigid_jacobian(theta, l1=L1, l2=L2):
 
 def closed_form(stiffness, damping, theta):
     m_inv = np.linalg.inv(rod_mass_matrix(theta[1]))
-    return np.block(
-        [[np.zeros((2, 2)), np.eye(2)], [-m_inv @ stiffness, -m_inv @ damping]]
-    )
+    return np.block([[np.zeros((2, 2)), np.eye(2)], [-m_inv @ stiffness, -m_inv @ damping]])
 
 
 POINT = (1.4, 0.7)

@@ -25,7 +25,21 @@ def test_ruff_clean():
     if ruff is None:
         pytest.skip("ruff is not installed (pip install -e '.[test]')")
     res = subprocess.run(
-        [*ruff, "check", "src", "tests", "benchmarks"],
+        [*ruff, "check", "src", "tests", "benchmarks", "examples"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert res.returncode == 0, res.stdout + res.stderr
+
+
+def test_ruff_format_clean():
+    ruff = _tool("ruff")
+    if ruff is None:
+        pytest.skip("ruff is not installed (pip install -e '.[test]')")
+    res = subprocess.run(
+        [*ruff, "format", "--check", "src", "tests", "benchmarks", "examples"],
         cwd=ROOT,
         capture_output=True,
         text=True,

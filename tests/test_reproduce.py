@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from flexarm.cli import main
-from flexarm.reproduce import OUTPUT_FILES, SENSOR_CASES, reproduce
+from flexarm.studies.reproduction import OUTPUT_FILES, SENSOR_CASES, reproduce
 
 SHORT = ("--duration", "0.15", "--ks-range", "0,10", "--workers", "2")
 

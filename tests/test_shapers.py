@@ -1,4 +1,4 @@
-"""Tests of :mod:`flexarm.shapers` against closed forms, simulations and the literature.
+"""Tests of :mod:`flexarm.control.shapers` against closed forms, simulations and the literature.
 
 Oracles (none calls the code under test to produce the expected value):
 
@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from flexarm.shapers import (
+from flexarm.control.shapers import (
     KINDS,
     Shaper,
     design,

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 import flexarm as fa
-from flexarm import simloop
-from flexarm.controllers import CompiledController, JacobianTransposePD, JointPD
-from flexarm.delays import DelayModel
-from flexarm.results import SimulationResult
-from flexarm.sensors import JointSensor, PointSensor, TipSensor, parse_sensor
-from flexarm.simulate import SimulationError, simulate
-from flexarm.trajectories import Circle, Line, Square
+from flexarm.control.controllers import CompiledController, JacobianTransposePD, JointPD
+from flexarm.control.trajectories import Circle, Line, Square
+from flexarm.sensing.delays import DelayModel
+from flexarm.sensing.sensors import JointSensor, PointSensor, TipSensor, parse_sensor
+from flexarm.sim import loop
+from flexarm.sim.results import SimulationResult
+from flexarm.sim.simulate import SimulationError, simulate
 
 
 @pytest.fixture(scope="module")
@@ -327,7 +327,7 @@ def test_unreachable_trajectory_is_rejected(paper):
 
 
 def test_loop_state_layout():
-    assert simloop.OK == 0 and simloop.DIVERGED == 1
+    assert loop.OK == 0 and loop.DIVERGED == 1
 
 
 # ------------------------------------------------------- a point short of the tip
@@ -380,7 +380,7 @@ def test_jacobian_transpose_law_uses_the_sensed_points_jacobian(paper):
 
 
 def test_rigid_arm_settles_on_target_through_a_point_sensor(rigid):
-    from flexarm.trajectories import PointToPoint
+    from flexarm.control.trajectories import PointToPoint
 
     move = PointToPoint((0.9, 0.6), (1.0, 0.8), 1.0)
     res = simulate(

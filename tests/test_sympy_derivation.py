@@ -1,7 +1,7 @@
 r"""Independent SymPy derivation of the flexible-arm equations of motion.
 
 The closed-form model of :class:`flexarm.FlexibleArm` (body-frame Jacobians and
-modal integrals, :mod:`flexarm.arm`, :mod:`flexarm.kernels`) is checked here
+modal integrals, :mod:`flexarm.model.arm`, :mod:`flexarm.model.dynamics`) is checked here
 against a derivation that shares nothing with it but the convention and the
 modal integrals of :class:`flexarm.modes.BeamModes`.
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from flexarm import FlexibleArm, Link
-from flexarm.trajectories import (
+from flexarm.control.trajectories import (
     Circle,
     Line,
     PointToPoint,

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from .arm import FlexibleArm
-from .joints import LinearJoint, MakkarFriction, NonlinearJoint
-from .link import Link
-from .modes import BeamModes
+from .model.arm import FlexibleArm
+from .model.joints import LinearJoint, MakkarFriction, NonlinearJoint
+from .model.link import Link
+from .model.modes import BeamModes
 
 __all__ = [
     "BeamModes",

@@ -13,7 +13,7 @@ import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
-from .. import __version__
+from .._version import __version__
 from . import identify, modes, reproduce, simulate
 from ._common import EXIT_USAGE, Parser, UsageError
 

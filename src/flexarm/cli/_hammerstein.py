@@ -3,7 +3,7 @@
 With DATA, :class:`flexarm.ident.HammersteinIdentifier` is fitted to an input
 column ``u`` and an output column ``y``; without, the nonlinear-joint robot is
 excited with a random torque and its stiffness, friction and drive
-nonlinearity are identified (:func:`flexarm.joint_identification.identify_joint`).
+nonlinearity are identified (:func:`flexarm.studies.joint_identification.identify_joint`).
 """
 
 from __future__ import annotations
@@ -151,7 +151,7 @@ def _write_data(
 
 def run_robot(args: argparse.Namespace, out: Path | None) -> Any:
     """The random-torque experiment on the nonlinear-joint robot."""
-    from ..joint_identification import JointExcitation, identify_joint
+    from ..studies.joint_identification import JointExcitation, identify_joint
 
     t0 = time.perf_counter()
     try:

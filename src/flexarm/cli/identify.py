@@ -605,7 +605,7 @@ The correlation approach assumes a white (i.i.d.) input.
 --hammerstein without DATA: the robot experiment (paper section IX): a nonlinear
 flexible joint driven by a random torque for --duration s (--seed), its stiffness,
 friction and drive curves identified and compared with the truth
-(flexarm.joint_identification); writes summary.json, curves.npz and
+(flexarm.studies.joint_identification); writes summary.json, curves.npz and
 identify_joint.png.
 
 output: with --out DIR (new or empty), DIR receives estimate.csv (x,m),

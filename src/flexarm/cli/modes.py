@@ -8,9 +8,9 @@ from typing import Any
 
 import numpy as np
 
-from ..arm import BOUNDARIES, FlexibleArm
-from ..joints import LinearJoint, MakkarFriction, NonlinearJoint
-from ..modes import NORMALIZATIONS, BeamModes
+from ..model.arm import BOUNDARIES, FlexibleArm
+from ..model.joints import LinearJoint, MakkarFriction, NonlinearJoint
+from ..model.modes import NORMALIZATIONS, BeamModes
 from ._common import UsageError
 
 __all__ = ["add_parser"]

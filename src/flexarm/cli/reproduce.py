@@ -9,8 +9,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ..adaptive import ADAPTATION_LAWS
-from ..reproduce import DEFAULT_KS_RANGE, OUTPUT_FILES, Reproduction, reproduce
+from ..control.adaptive import ADAPTATION_LAWS
+from ..studies.reproduction import DEFAULT_KS_RANGE, OUTPUT_FILES, Reproduction, reproduce
 from ._common import EXIT_FAILURE, UsageError, check_out
 
 __all__ = ["add_parser"]
@@ -96,7 +96,7 @@ summary, and states for each of the paper's claims whether the model supports it
 """
 
 _EPILOG = """\
-the fuzzy law (flexarm.adaptive.FuzzyAdaptiveJTPD): the FLS reads ks times the
+the fuzzy law (flexarm.control.adaptive.FuzzyAdaptiveJTPD): the FLS reads ks times the
 links' tip deflections (m); its output lambda scales the whole JT-PD law (--law
 scaled, the paper's printed form) or only its damping (--law damping) by
 lambda / lambda(0, 0), so both laws equal the nonadaptive law with straight links.

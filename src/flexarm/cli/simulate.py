@@ -11,9 +11,10 @@ from typing import Any
 
 import numpy as np
 
-from ..delays import DELAY_METHODS
-from ..results import SimulationResult
-from ..scenario import (
+from ..sensing.delays import DELAY_METHODS
+from ..sensing.sensors import PointSensor, Sensor, parse_sensor
+from ..sim.results import SimulationResult
+from ..sim.scenario import (
     CONTROLLERS,
     DELAY_MODELS,
     SHAPER_MODES,
@@ -23,8 +24,7 @@ from ..scenario import (
     apply_overrides,
     read_scenario,
 )
-from ..sensors import PointSensor, Sensor, parse_sensor
-from ..simulate import SimulationError, simulate
+from ..sim.simulate import SimulationError, simulate
 from ._common import EXIT_FAILURE, UsageError, check_out, json_ready, output_directory
 
 __all__ = ["OUTPUT_FILES", "add_parser"]
@@ -218,7 +218,7 @@ _SIMULATE_DESCRIPTION = """\
 Simulate the closed loop: by default the paper's arm (two 4.5 m links, one mode each)
 tracking the default square (20 s) under the paper's Jacobian-transpose PD gains with
 joint encoders. --scenario FILE.toml sets anything (arm, trajectory, sensor, controller,
-delay, shaper, simulation; schema in flexarm.scenario, example in
+delay, shaper, simulation; schema in flexarm.sim.scenario, example in
 examples/paper_square.toml); options given on the command line override the file.
 """
 

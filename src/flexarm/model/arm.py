@@ -33,7 +33,7 @@ and with flexible ``joints`` the motor angles (reflected to the link side).
 Flexible joints
 ---------------
 Joint ``i`` couples its motor angle to the link angle by a spring of
-deflection ``Delta_i = q_mi - theta_i`` (:mod:`flexarm.joints`): the spring
+deflection ``Delta_i = q_mi - theta_i`` (:mod:`flexarm.model.joints`): the spring
 torque acts on ``theta_i`` and its reaction on ``q_mi``; the input torque and
 motor damping act on ``q_mi``. Friction acts on the link side, on
 ``dtheta_i`` (paper eq. 7), or with ``joint_friction="motor"`` on ``dq_mi``.
@@ -78,8 +78,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
-from . import kernels
-from ._validation import (
+from .._validation import (
     check_array,
     check_int,
     check_option,
@@ -87,6 +86,7 @@ from ._validation import (
     check_sequence_of,
     validate_real_fields,
 )
+from . import dynamics as kernels
 from .joints import LinearJoint, NonlinearJoint
 from .link import Link
 from .modes import NORMALIZATIONS, BeamModes
@@ -553,7 +553,7 @@ class FlexibleArm:
             Joint (motor) torques, N m.
         backend : {"numpy", "compiled"}
             ``"numpy"`` is the readable reference; ``"compiled"`` calls the Numba
-            kernel :func:`flexarm.kernels.forward_dynamics` (compiled on first use,
+            kernel :func:`flexarm.model.dynamics.forward_dynamics` (compiled on first use,
             cached on disk).
 
         Returns

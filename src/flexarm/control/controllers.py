@@ -5,7 +5,7 @@ Every controller is the same thing to the simulator: a compiled function
     control(t, y, r, params, state, tau)
 
 of the time (s), the measurement ``y`` and reference ``r`` (layouts in
-:mod:`flexarm.signals`), a parameter vector, a mutable state vector (for
+:mod:`flexarm.control.signals`), a parameter vector, a mutable state vector (for
 integrators, filters, adaptation) and the output torques ``tau`` (N m, one per
 joint; written in place). The simulator calls it once per control period from
 its compiled loop through a C function pointer (``numba.cfunc``), so one cached
@@ -40,8 +40,8 @@ import numpy as np
 from numba import carray, types  # type: ignore[attr-defined]
 from numpy.typing import ArrayLike, NDArray
 
-from ._validation import check_array, check_real
-from .kernels import njit_runtime_free
+from .._validation import check_array, check_real
+from ..model.dynamics import njit_runtime_free
 
 __all__ = [
     "CONTROL_SIGNATURE",

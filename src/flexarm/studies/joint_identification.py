@@ -13,8 +13,8 @@ Makkar friction on the link side and a motor-side (back-EMF) damping
 ``u`` into the applied torque ``tau = phi(u)`` with a dead band and a
 saturation (:class:`DriveNonlinearity`). The command is a seeded
 piecewise-constant random sequence, ``u ~ U(-amplitude, amplitude)`` i.i.d.,
-held for ``hold`` seconds; :func:`flexarm.simulate.simulate` plays it through
-a :class:`~flexarm.controllers.CompiledController` (open loop) at the sample
+held for ``hold`` seconds; :func:`flexarm.sim.simulate.simulate` plays it through
+a :class:`~flexarm.control.controllers.CompiledController` (open loop) at the sample
 period ``dt`` (default 0.2 ms).
 
 Measurements (:class:`JointSensors`; Gaussian noise, seeded)
@@ -79,16 +79,16 @@ import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._io import atomic_path
-from ._validation import check_int, check_option, check_real, validate_real_fields
-from .arm import FlexibleArm
-from .controllers import CompiledController
-from .ident.hammerstein import HammersteinIdentifier, fit_percent
-from .ident.regression import SemiRecursiveKernelRegression
-from .ident.systems import as_generator
-from .joints import LinearJoint, MakkarFriction, NonlinearJoint
-from .link import Link
-from .simulate import simulate
+from .._io import atomic_path
+from .._validation import check_int, check_option, check_real, validate_real_fields
+from ..control.controllers import CompiledController
+from ..ident.hammerstein import HammersteinIdentifier, fit_percent
+from ..ident.regression import SemiRecursiveKernelRegression
+from ..ident.systems import as_generator
+from ..model.arm import FlexibleArm
+from ..model.joints import LinearJoint, MakkarFriction, NonlinearJoint
+from ..model.link import Link
+from ..sim.simulate import simulate
 
 __all__ = [
     "CurveEstimate",

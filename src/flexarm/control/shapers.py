@@ -68,7 +68,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import root
 
-from ._validation import check_array, check_option, check_real
+from .._validation import check_array, check_option, check_real
 
 __all__ = [
     "KINDS",

@@ -9,7 +9,7 @@ substep resolution: the exact delay is a ring buffer of the sensed signal
 (delay rounded to whole substeps), the Padé delay a discrete state-space
 filter discretised exactly over one substep (zero-order hold on its input).
 
-Everything is plain arrays; :func:`flexarm.simulate.simulate` prepares them.
+Everything is plain arrays; :func:`flexarm.sim.simulate.simulate` prepares them.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from .kernels import (
+from ..model.dynamics import (
     LEN,
     ArmArrays,
     Workspace,
@@ -193,7 +193,7 @@ def _rk4_two_links_one_mode(
     q: F64, dq: F64, tau: F64, h: float, model: ArmArrays
 ) -> None:  # pragma: no cover - compiled
     """:func:`_rk4` for two links with one mode each and rigid joints, in scalars
-    (:func:`flexarm.kernels.accelerations_two_links_one_mode`): the stage states
+    (:func:`flexarm.model.dynamics.accelerations_two_links_one_mode`): the stage states
     and sums stay in registers. Same operations in the same order as :func:`_rk4`.
 
     Inlined into :func:`run`, so a step passes no arrays through a call; kept
@@ -231,7 +231,7 @@ def _rk4_two_links_one_mode(
 @njit_runtime_free(cache=True, nogil=True)
 def run(
     model: ArmArrays,
-    control: Any,  # FunctionType: see flexarm.controllers.CONTROL_SIGNATURE
+    control: Any,  # FunctionType: see flexarm.control.controllers.CONTROL_SIGNATURE
     params: F64,
     sensor: SensorArrays,
     reference: F64,

@@ -1,7 +1,7 @@
 """Sensors: collocated (joint encoders) and noncollocated (a point on a link).
 
 A sensor decides what the controller sees as the position and velocity of the
-end effector (layout in :mod:`flexarm.signals`):
+end effector (layout in :mod:`flexarm.control.signals`):
 
 * :class:`JointSensor` — collocated: the joint angles and rates (the motor
   angles for flexible joints); position and velocity follow from the rigid
@@ -15,7 +15,7 @@ end effector (layout in :mod:`flexarm.signals`):
 
 Noise is Gaussian, drawn from the simulation's ``rng`` (seeded runs are
 reproducible); quantisation rounds to a multiple of the resolution. A transport
-delay (:mod:`flexarm.delays`) acts on the sensed signal before noise and
+delay (:mod:`flexarm.sensing.delays`) acts on the sensed signal before noise and
 quantisation. With a noncollocated sensor the encoder angles that feed the
 Jacobian are taken as exact and undelayed.
 """
@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import check_int, check_real, validate_real_fields
+from .._validation import check_int, check_real, validate_real_fields
 
 __all__ = ["JointSensor", "PointSensor", "Sensor", "TipSensor", "check_sensor", "parse_sensor"]
 

@@ -3,7 +3,7 @@
 :func:`load_scenario` reads a file, :meth:`Scenario.from_dict` builds the same
 from a mapping; both return a :class:`Scenario` holding the built library
 objects, and ``simulate(s.arm, **s.simulate_kwargs())`` runs it
-(:func:`flexarm.simulate.simulate`). ``flexarm simulate --scenario FILE`` is the
+(:func:`flexarm.sim.simulate.simulate`). ``flexarm simulate --scenario FILE`` is the
 command-line front end; ``examples/paper_square.toml`` is a complete file.
 
 Schema
@@ -84,10 +84,10 @@ builds, with the same names and SI units::
     # max_deflection = 4.5    # m (default: each link's length)
 
 ``delay = "seed"`` or ``"dispersive"`` computes the wave-travel delay
-(:func:`flexarm.delays.travel_delay`) over the path length along the links
+(:func:`flexarm.sensing.delays.travel_delay`) over the path length along the links
 from the base joint to the sensed point (:func:`sensor_path_length`: 0 for
 joint encoders, 9 m for the paper arm's tip, 5 m for ``point`` link 1 at
-0.5 m) at the seed's wave speed (:data:`flexarm.delays.SEED_WAVE_SPEED`) or at
+0.5 m) at the seed's wave speed (:data:`flexarm.sensing.delays.SEED_WAVE_SPEED`) or at
 the dispersive bending group speed of the first link at its first clamped
 frequency.
 
@@ -108,7 +108,7 @@ Examples
 >>> Scenario.from_dict({"trajectory": {"sidee": 1.0}}, source="s.toml")  # doctest: +ELLIPSIS
 Traceback (most recent call last):
 ...
-flexarm.scenario.ScenarioError: s.toml: unknown key 'trajectory.sidee' (Square takes center, ...)
+flexarm.sim.scenario.ScenarioError: s.toml: unknown key 'trajectory.sidee' (Square takes ...)
 """
 
 from __future__ import annotations
@@ -124,21 +124,21 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from ._validation import check_array, check_int, check_option, check_real
-from .adaptive import FuzzyAdaptiveJTPD
-from .arm import FlexibleArm
-from .controllers import Controller, JacobianTransposePD, JointPD
-from .delays import (
+from .._validation import check_array, check_int, check_option, check_real
+from ..control.adaptive import FuzzyAdaptiveJTPD
+from ..control.controllers import Controller, JacobianTransposePD, JointPD
+from ..control.shapers import Shaper, design, for_modes
+from ..control.trajectories import ELBOWS, Circle, Line, PointToPoint, Square, Waypoints
+from ..model.arm import FlexibleArm
+from ..model.joints import LinearJoint, MakkarFriction, NonlinearJoint
+from ..model.link import Link
+from ..sensing.delays import (
     SEED_WAVE_SPEED,
     DelayModel,
     bending_group_speed,
     travel_delay,
 )
-from .joints import LinearJoint, MakkarFriction, NonlinearJoint
-from .link import Link
-from .sensors import JointSensor, PointSensor, Sensor, TipSensor
-from .shapers import Shaper, design, for_modes
-from .trajectories import ELBOWS, Circle, Line, PointToPoint, Square, Waypoints
+from ..sensing.sensors import JointSensor, PointSensor, Sensor, TipSensor
 
 __all__ = [
     "CONTROLLERS",
@@ -356,7 +356,7 @@ def sensor_path_length(arm: FlexibleArm, sensor: Sensor) -> float:
 # ------------------------------------------------------------------ settings
 @dataclass(frozen=True)
 class SimulationSettings:
-    """The ``[simulation]`` section: keyword arguments of :func:`flexarm.simulate.simulate`.
+    """The ``[simulation]`` section: keyword arguments of :func:`flexarm.sim.simulate.simulate`.
 
     Parameters
     ----------
@@ -423,7 +423,7 @@ class Scenario:
     controller : Controller
         The feedback law.
     trajectory : trajectory object
-        The desired end-effector path (:mod:`flexarm.trajectories`).
+        The desired end-effector path (:mod:`flexarm.control.trajectories`).
     sensor : JointSensor, PointSensor or TipSensor
         What the controller sees.
     delay : DelayModel
@@ -509,7 +509,7 @@ class Scenario:
         )
 
     def simulate_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :func:`flexarm.simulate.simulate` after the arm:
+        """Keyword arguments of :func:`flexarm.sim.simulate.simulate` after the arm:
         ``simulate(s.arm, **s.simulate_kwargs())``."""
         s = self.simulation
         return {

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ._validation import check_int, validate_real_fields
+from .._validation import check_int, validate_real_fields
 
 __all__ = ["Link"]
 

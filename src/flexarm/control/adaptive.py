@@ -9,7 +9,7 @@ part of it a parameter:
 
 * The FLS inputs are the tip deflections ``delta_i = sum_j phi_ij(L_i) eta_ij``
   of the links in m (from the modal coordinates in the measurement, see
-  :mod:`flexarm.signals`), multiplied by ``ks``: the membership functions'
+  :mod:`flexarm.control.signals`), multiplied by ``ks``: the membership functions'
   bases are ``1/ks`` times as wide as printed. ``ks = 1`` is the paper's
   universe of +-5 m; ``ks = 0`` switches the adaptation off.
 * The output sets the gain relative to its value at rest,
@@ -24,7 +24,7 @@ part of it a parameter:
   stiffness untouched.
 
 The default is the paper's printed form because it is the only reading with
-the text's support; :func:`flexarm.reproduce.reproduce` reports both, over a
+the text's support; :func:`flexarm.studies.reproduction.reproduce` reports both, over a
 range of ``ks``.
 """
 
@@ -38,7 +38,8 @@ import numpy as np
 from numba import carray  # type: ignore[attr-defined]
 from numpy.typing import NDArray
 
-from ._validation import check_option, check_real
+from .._validation import check_option, check_real
+from ..fuzzy import CompiledFuzzySystem, FuzzySystem, evaluate_into, paper_system, workspace_size
 from .controllers import (
     CONTROL_SIGNATURE,
     Controller,
@@ -46,7 +47,6 @@ from .controllers import (
     jacobian_transpose_law,
     operational_lengths,
 )
-from .fuzzy import CompiledFuzzySystem, FuzzySystem, evaluate_into, paper_system, workspace_size
 
 __all__ = ["ADAPTATION_LAWS", "FuzzyAdaptiveJTPD", "tip_deflections"]
 

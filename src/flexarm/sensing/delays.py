@@ -80,7 +80,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
-from ._validation import check_array, check_int, check_option, check_real, validate_real_fields
+from .._validation import check_array, check_int, check_option, check_real, validate_real_fields
 
 __all__ = [
     "DELAY_METHODS",

@@ -12,8 +12,8 @@ completes without diverging and its RMS end-effector error is at most
 The paper gives no figure; the tolerance is a parameter and the report prints
 every error beside the verdict, so a reader can apply their own.
 
-Every run is one :func:`flexarm.simulate.simulate` call built from a
-:class:`flexarm.scenario.Scenario`, so each case can be rerun with
+Every run is one :func:`flexarm.sim.simulate.simulate` call built from a
+:class:`flexarm.sim.scenario.Scenario`, so each case can be rerun with
 ``flexarm simulate --scenario`` (the report lists the settings). A run that
 diverges is reported as such, with the time, and its partial result is kept
 for the figures.
@@ -38,13 +38,13 @@ from typing import Any
 
 import numpy as np
 
-from ._io import json_ready, output_directory
-from ._validation import check_int, check_option, check_real
-from .adaptive import ADAPTATION_LAWS
-from .linearize import closed_loop_poles
-from .results import SimulationResult
-from .scenario import Scenario
-from .simulate import SimulationError, simulate
+from .._io import json_ready, output_directory
+from .._validation import check_int, check_option, check_real
+from ..control.adaptive import ADAPTATION_LAWS
+from ..control.linearize import closed_loop_poles
+from ..sim.results import SimulationResult
+from ..sim.scenario import Scenario
+from ..sim.simulate import SimulationError, simulate
 
 __all__ = [
     "CONTROLLER_KINDS",
@@ -105,7 +105,7 @@ class Case:
         return (self.controller, self.sensor, self.delay, self.ks, self.law)
 
     def scenario_dict(self, duration: float | None, dt: float) -> dict[str, Any]:
-        """The case in the scenario-file schema (:mod:`flexarm.scenario`)."""
+        """The case in the scenario-file schema (:mod:`flexarm.sim.scenario`)."""
         if self.sensor.startswith("point:"):
             _, link, distance = self.sensor.split(":")
             sensor: dict[str, Any] = {
@@ -159,7 +159,7 @@ class CaseResult:
     max_real_pole : float
         Largest real part of the closed-loop poles linearised at the start of
         the path, in continuous time without delay
-        (:func:`flexarm.linearize.closed_loop_poles`), rad/s: > 0 means the
+        (:func:`flexarm.control.linearize.closed_loop_poles`), rad/s: > 0 means the
         loop cannot hold the path's start whatever the control period.
     result : SimulationResult
         The (partial, if diverged) time series, for the figures.
@@ -338,7 +338,7 @@ class Reproduction:
 
     def plot_surface(self, fig: Any) -> Any:
         """The paper's fuzzy surface lambda(delta1, delta2)."""
-        from .fuzzy import paper_system, plot_surface
+        from ..fuzzy import paper_system, plot_surface
 
         ax = fig.add_subplot(1, 1, 1, projection="3d")
         plot_surface(paper_system(), ax=ax)
@@ -570,7 +570,7 @@ def reproduce(
         Control period, s (2e-4: the hubless paper arm under the paper's gains
         is sampled-data unstable at 1 ms).
     ks, law
-        The fuzzy law of the paper's matrix (:class:`flexarm.adaptive.FuzzyAdaptiveJTPD`).
+        The fuzzy law of the paper's matrix (:class:`flexarm.control.adaptive.FuzzyAdaptiveJTPD`).
     ks_range : sequence of float
         The ``ks`` values of the sensitivity study (each >= 0).
     laws : sequence of {"scaled", "damping"}

@@ -69,7 +69,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._validation import validate_real_fields
+from .._validation import validate_real_fields
 
 __all__ = ["Joint", "LinearJoint", "MakkarFriction", "NonlinearJoint"]
 

@@ -11,8 +11,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._io import atomic_path
 from . import metrics as _m
-from ._io import atomic_path
 
 __all__ = ["SimulationResult"]
 
@@ -47,7 +47,7 @@ class SimulationResult:
     tau : ndarray, shape (K, n_links)
         Torque applied over ``[t_k, t_k+1)`` (after saturation), N m.
     reference : ndarray, shape (K, 6 + 2 n_links)
-        What the controller was given (:mod:`flexarm.signals` layout): shaped
+        What the controller was given (:mod:`flexarm.control.signals` layout): shaped
         and delayed if those options were on.
     desired : ndarray, shape (K, 2)
         The desired end-effector path, m (errors are measured against it).
@@ -105,7 +105,7 @@ class SimulationResult:
 
     # ------------------------------------------------------------------ metrics
     def metrics(self, corner_window: float = 1.0, settle_tolerance: float = 0.01) -> dict[str, Any]:
-        """The standard metrics (:mod:`flexarm.metrics`) as a JSON-able dict.
+        """The standard metrics (:mod:`flexarm.sim.metrics`) as a JSON-able dict.
 
         Parameters
         ----------

@@ -17,9 +17,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._validation import check_array, check_option, check_real
+from .._validation import check_array, check_option, check_real
+from ..sensing.sensors import check_sensor
 from .controllers import Controller
-from .sensors import check_sensor
 from .signals import measurement_size, reference_size
 
 __all__ = ["closed_loop_matrix", "closed_loop_poles"]
@@ -35,7 +35,7 @@ def _rigid_point(arm: Any, theta: F64, link: int, distance: float) -> F64:
 
 
 def _measure(arm: Any, sensor: Any, q: F64, dq: F64, h: float) -> F64:
-    """The measurement ``y`` (:mod:`flexarm.signals`) of the state, undelayed
+    """The measurement ``y`` (:mod:`flexarm.control.signals`) of the state, undelayed
     (``h``: the difference step, rad or modal units, of the point's velocity)."""
     n_links = arm.n_links
     y = np.zeros(measurement_size(n_links, sum(arm.n_modes)))
@@ -162,8 +162,8 @@ def closed_loop_poles(
     Examples
     --------
     >>> import flexarm as fa
-    >>> from flexarm.controllers import JacobianTransposePD
-    >>> from flexarm.sensors import TipSensor
+    >>> from flexarm.control.controllers import JacobianTransposePD
+    >>> from flexarm.sensing.sensors import TipSensor
     >>> arm = fa.FlexibleArm.paper()
     >>> poles = closed_loop_poles(arm, JacobianTransposePD.from_arm(arm), (7.0, -2.0), TipSensor())
     >>> bool(poles[0].real > 0)   # tip feedback: unstable

@@ -2,12 +2,12 @@
 
 The controller runs at its sample rate (period ``dt``) with zero-order hold;
 the plant is integrated by fixed-step RK4 with ``substeps`` steps per period;
-the whole loop is compiled (:mod:`flexarm.simloop`). ``method="scipy"`` runs
+the whole loop is compiled (:mod:`flexarm.sim.loop`). ``method="scipy"`` runs
 the same sampled-data loop with SciPy's adaptive ``solve_ivp`` (DOP853) between
 control instants instead, as the accuracy reference for the fixed-step path.
 
 Reference path: the trajectory gives the desired end-effector path; an input
-shaper (:mod:`flexarm.shapers`) reshapes it; with ``delay_reference=True`` it is
+shaper (:mod:`flexarm.control.shapers`) reshapes it; with ``delay_reference=True`` it is
 also delayed by the sensor's transport delay (the paper's correction of the NMP
 response, "time delays for command signals input to the control law"); inverse
 kinematics (two-link arms) turns it into joint references. Tracking errors are
@@ -32,14 +32,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import kernels, simloop
-from ._validation import check_array, check_int, check_option, check_real
-from .controllers import Controller, JacobianTransposePD
-from .delays import DelayModel, discretize, pade_state_space
+from .._validation import check_array, check_int, check_option, check_real
+from ..control.controllers import Controller, JacobianTransposePD
+from ..control.signals import measurement_size, reference_size
+from ..control.trajectories import Square
+from ..model import dynamics as kernels
+from ..sensing.delays import DelayModel, discretize, pade_state_space
+from ..sensing.sensors import Sensor, check_sensor
+from . import loop as simloop
 from .results import SimulationResult
-from .sensors import Sensor, check_sensor
-from .signals import measurement_size, reference_size
-from .trajectories import Square
 
 __all__ = ["SimulationError", "simulate"]
 
@@ -142,7 +143,7 @@ def simulate(
     trajectory : trajectory object, optional
         Anything with ``evaluate(t) -> (position, velocity, acceleration)``
         (arrays (m, 2)), ``duration`` and ``corner_times``; default
-        :class:`flexarm.trajectories.Square` ().
+        :class:`flexarm.control.trajectories.Square` ().
     sensor : JointSensor, PointSensor or TipSensor, optional
         Default :class:`JointSensor` (). With a point short of the end effector
         (two-link arms), the operational-space command ``r[0:4]`` is that

@@ -4,9 +4,9 @@ These Numba functions are what the simulator calls millions of times. They take
 the packed model :class:`ArmArrays` (built once by
 :attr:`flexarm.FlexibleArm.arrays`) and a :class:`Workspace` allocated once, so
 a call allocates nothing. The readable NumPy implementation in
-:mod:`flexarm.arm` is their reference; the tests hold the two together.
+:mod:`flexarm.model.arm` is their reference; the tests hold the two together.
 
-The model (see :mod:`flexarm.arm` for the derivation): the kinetic energy of
+The model (see :mod:`flexarm.model.arm` for the derivation): the kinetic energy of
 link ``i`` in its clamped frame is ``1/2 nu' Mb(delta) nu`` with body velocity
 ``nu = (u_x, u_y, alpha_dot, delta_dot) = Jb qdot``; ``M = sum Jb' Mb Jb`` and
 the velocity terms ``h = C(q, qdot) qdot = sum Jb' beta`` with ``beta`` the

@@ -40,7 +40,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._validation import check_array, check_int, check_option, check_real, validate_real_fields
+from .._validation import check_array, check_int, check_option, check_real, validate_real_fields
 
 __all__ = [
     "Circle",

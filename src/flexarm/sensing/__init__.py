@@ -1,0 +1,3 @@
+"""sensing"""
+
+__all__: list[str] = []
