@@ -19,7 +19,8 @@ SRC = pathlib.Path(__file__).resolve().parents[1] / "src" / "flexarm"
 # lower layers; packages of the same layer (e.g. model, fuzzy, ident) do not import
 # each other.
 LAYERS: list[tuple[str, ...]] = [
-    ("_version", "_validation", "_io", "errors"),  # shared checks, atomic output, error types
+    ("_version", "errors"),  # the version; the error types
+    ("_lazy", "_validation", "_io"),  # lazy attributes, input checks, atomic output
     ("model", "fuzzy", "ident"),  # the plant; fuzzy inference; estimators from data
     ("sensing",),  # what a controller can see: sensors and transport delays
     ("control",),  # references, shapers, control laws, linear analysis
@@ -141,12 +142,17 @@ def test_the_rule_itself(importer, imported, ok):
 @pytest.mark.parametrize("path", [p for p in MODULES if p.stem != "__main__"], ids=module_name)
 def test_module_declares_all(path):
     tree = ast.parse(path.read_text())
-    names = {
-        t.id
+    targets = [
+        t
         for node in tree.body
         if isinstance(node, ast.Assign | ast.AnnAssign)
         for t in (node.targets if isinstance(node, ast.Assign) else [node.target])
-        if isinstance(t, ast.Name)
+    ]
+    names = {
+        n.id
+        for t in targets
+        for n in (t.elts if isinstance(t, ast.Tuple) else [t])
+        if isinstance(n, ast.Name)
     }
     assert "__all__" in names
 

@@ -1,20 +1,68 @@
-"""flexarm: model, simulate, control and identify flexible robot manipulators."""
+"""flexarm: model, simulate, control and identify flexible robot manipulators.
+
+The package is layered as the data flows (parameters -> model -> simulator <-
+controllers, sensors, references -> results; data -> estimators):
+
+* :mod:`flexarm.model` — beam modes, links, joints, the arm and its compiled dynamics;
+* :mod:`flexarm.sensing` — sensors and transport delays;
+* :mod:`flexarm.control` — trajectories, input shapers, control laws, linear analysis;
+* :mod:`flexarm.sim` — the simulator, its results and metrics, scenario files;
+* :mod:`flexarm.fuzzy` — Mamdani fuzzy inference (the paper's adaptive law);
+* :mod:`flexarm.ident` — kernel regression and Hammerstein identification;
+* :mod:`flexarm.studies` — the paper's reproduction and the robot-joint study;
+* :mod:`flexarm.cli` — the ``flexarm`` command.
+
+Everything is imported on first use: ``import flexarm`` is cheap (no Numba, no
+Matplotlib), and ``flexarm.ident.SemiRecursiveKernelRegression`` works without
+importing :mod:`flexarm.ident` first.
+"""
 
 from __future__ import annotations
 
-from .model.arm import FlexibleArm
-from .model.joints import LinearJoint, MakkarFriction, NonlinearJoint
-from .model.link import Link
-from .model.modes import BeamModes
+from typing import TYPE_CHECKING
 
-__all__ = [
-    "BeamModes",
-    "FlexibleArm",
-    "LinearJoint",
-    "Link",
-    "MakkarFriction",
-    "NonlinearJoint",
-    "__version__",
-]
+from ._lazy import attach
+from ._version import __version__
 
-__version__ = "0.1.0"
+_SUBPACKAGES = (
+    "cli",
+    "control",
+    "fuzzy",
+    "ident",
+    "model",
+    "modes",
+    "sensing",
+    "sim",
+    "studies",
+)
+_NAMES = {
+    "BeamModes": "model.modes",
+    "FlexibleArm": "model.arm",
+    "LinearJoint": "model.joints",
+    "Link": "model.link",
+    "MakkarFriction": "model.joints",
+    "NonlinearJoint": "model.joints",
+    "SimulationError": "sim.simulate",
+    "SimulationResult": "sim.results",
+    "simulate": "sim.simulate",
+}
+
+__getattr__, __dir__, __all__ = attach(__name__, _SUBPACKAGES, _NAMES)
+__all__ += ["__version__"]
+
+if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run time
+    from .model.arm import FlexibleArm as FlexibleArm
+    from .model.joints import (
+        LinearJoint as LinearJoint,
+    )
+    from .model.joints import (
+        MakkarFriction as MakkarFriction,
+    )
+    from .model.joints import (
+        NonlinearJoint as NonlinearJoint,
+    )
+    from .model.link import Link as Link
+    from .model.modes import BeamModes as BeamModes
+    from .sim.results import SimulationResult as SimulationResult
+    from .sim.simulate import SimulationError as SimulationError
+    from .sim.simulate import simulate as simulate

@@ -19,6 +19,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .errors import InvalidTypeError, InvalidValueError
+
 __all__ = [
     "check_array",
     "check_int",
@@ -69,14 +71,14 @@ def check_real(
         if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "fiu":
             value = value.item()
         else:
-            raise TypeError(_fail(name, owner, "a real number", value))
+            raise InvalidTypeError(_fail(name, owner, "a real number", value))
     x = float(value)
     if not math.isfinite(x):
-        raise ValueError(_fail(name, owner, "finite", x))
+        raise InvalidValueError(_fail(name, owner, "finite", x))
     if positive and not x > 0.0:
-        raise ValueError(_fail(name, owner, "> 0", x))
+        raise InvalidValueError(_fail(name, owner, "> 0", x))
     if nonnegative and not x >= 0.0:
-        raise ValueError(_fail(name, owner, ">= 0", x))
+        raise InvalidValueError(_fail(name, owner, ">= 0", x))
     return x
 
 
@@ -105,13 +107,13 @@ def check_sequence_of(
     if isinstance(value, types):
         return (value,)
     if not isinstance(value, Sequence) or isinstance(value, str):
-        raise TypeError(
+        raise InvalidTypeError(
             _fail(name, owner, f"a sequence of {what}", _Described(type(value).__name__))
         )
     items = tuple(value)
     for k, item in enumerate(items):
         if not isinstance(item, types):
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The '{name}' parameter of {owner} must hold {what} objects. "
                 f"Got {type(item).__name__} at position {k} instead."
             )
@@ -121,10 +123,10 @@ def check_sequence_of(
 def check_int(value: Any, name: str, owner: str, *, minimum: int | None = None) -> int:
     """Return ``value`` as a Python int (no silent truncation of floats), or raise."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise TypeError(_fail(name, owner, "an integer", value))
+        raise InvalidTypeError(_fail(name, owner, "an integer", value))
     n = int(value)
     if minimum is not None and n < minimum:
-        raise ValueError(_fail(name, owner, f">= {minimum}", n))
+        raise InvalidValueError(_fail(name, owner, f">= {minimum}", n))
     return n
 
 
@@ -132,9 +134,9 @@ def check_option(value: Any, name: str, owner: str, options: Iterable[str]) -> s
     """Return ``value`` if it is one of ``options``, or raise naming them all."""
     opts = tuple(options)
     if not isinstance(value, str):
-        raise TypeError(_fail(name, owner, f"a str, one of {opts}", value))
+        raise InvalidTypeError(_fail(name, owner, f"a str, one of {opts}", value))
     if value not in opts:
-        raise ValueError(_fail(name, owner, f"one of {opts}", value))
+        raise InvalidValueError(_fail(name, owner, f"one of {opts}", value))
     return value
 
 
@@ -156,9 +158,13 @@ def check_array(
     try:
         arr = np.asarray(value)
     except Exception as exc:  # pragma: no cover - numpy raises many types here
-        raise TypeError(_fail(name, owner, "array-like", _Described(type(value).__name__))) from exc
+        raise InvalidTypeError(
+            _fail(name, owner, "array-like", _Described(type(value).__name__))
+        ) from exc
     if arr.dtype.kind not in "biufc":
-        raise TypeError(_fail(name, owner, "a numeric array", _Described(f"dtype {arr.dtype}")))
+        raise InvalidTypeError(
+            _fail(name, owner, "a numeric array", _Described(f"dtype {arr.dtype}"))
+        )
     if arr.dtype.kind != "c":
         arr = arr.astype(dtype, copy=False)
     if shape is not None:
@@ -166,13 +172,13 @@ def check_array(
             s == -1 or s == a for s, a in zip(shape, arr.shape, strict=True)
         )
         if not ok:
-            raise ValueError(
+            raise InvalidValueError(
                 _fail(
                     name, owner, f"of shape {_shape_text(shape)}", _Described(f"shape {arr.shape}")
                 )
             )
     if finite and not np.all(np.isfinite(arr)):
-        raise ValueError(
+        raise InvalidValueError(
             _fail(name, owner, "finite (no NaN or inf)", _Described("non-finite entries"))
         )
     return arr

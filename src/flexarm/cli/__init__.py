@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from .._version import __version__
+from ..errors import InvalidTypeError, InvalidValueError
 from . import identify, modes, reproduce, simulate
 from ._common import EXIT_USAGE, Parser, UsageError
 
@@ -49,7 +50,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UsageError as exc:
         print(exc, file=sys.stderr)
         return EXIT_USAGE
-    except (ValueError, TypeError) as exc:
+    except (InvalidValueError, InvalidTypeError) as exc:
+        # flexarm's own input checks; any other exception is a bug and shows its traceback
         print(f"flexarm: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
 

@@ -39,6 +39,7 @@ from numba import carray  # type: ignore[attr-defined]
 from numpy.typing import NDArray
 
 from .._validation import check_option, check_real
+from ..errors import InvalidTypeError, InvalidValueError
 from ..fuzzy import CompiledFuzzySystem, FuzzySystem, evaluate_into, paper_system, workspace_size
 from .controllers import (
     CONTROL_SIGNATURE,
@@ -211,7 +212,7 @@ class FuzzyAdaptiveJTPD(Controller):
         object.__setattr__(self, "ks", check_real(self.ks, "ks", owner, nonnegative=True))
         check_option(self.law, "law", owner, ADAPTATION_LAWS)
         if self.fls is not None and not isinstance(self.fls, FuzzySystem):
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'fls' parameter of {owner} must be a flexarm.fuzzy.FuzzySystem. "
                 f"Got {type(self.fls).__name__} instead."
             )
@@ -259,13 +260,13 @@ class FuzzyAdaptiveJTPD(Controller):
         owner = "FuzzyAdaptiveJTPD"
         fls = self.system
         if len(fls.inputs) != arm.n_links:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'fls' parameter of {owner} must have one input per link "
                 f"({arm.n_links}). Got {len(fls.inputs)} inputs instead."
             )
         lam0 = self.lambda0
         if not (np.isfinite(lam0) and lam0 > 0):
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'fls' parameter of {owner} must give a positive output with straight "
                 f"links (the gain is lambda / lambda0). Got lambda0 = {lam0!r} instead."
             )

@@ -41,6 +41,7 @@ from numba import carray, types  # type: ignore[attr-defined]
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_real
+from ..errors import InvalidTypeError, InvalidValueError
 from ..model.dynamics import njit_runtime_free
 
 __all__ = [
@@ -217,12 +218,12 @@ def _gain_vector(value: ArrayLike, name: str, owner: str, n: int) -> NDArray[np.
     if g.ndim == 0:
         g = np.full(n, float(g))
     if g.shape != (n,):
-        raise ValueError(
+        raise InvalidValueError(
             f"The '{name}' parameter of {owner} must be a scalar or of shape ({n},). "
             f"Got shape {g.shape} instead."
         )
     if np.any(g < 0):
-        raise ValueError(f"The '{name}' parameter of {owner} must be >= 0. Got {g} instead.")
+        raise InvalidValueError(f"The '{name}' parameter of {owner} must be >= 0. Got {g} instead.")
     return g
 
 
@@ -233,7 +234,7 @@ def _gain_matrix(value: ArrayLike, name: str, owner: str) -> NDArray[np.float64]
     elif g.shape == (2,):
         g = np.diag(g)
     if g.shape != (2, 2):
-        raise ValueError(
+        raise InvalidValueError(
             f"The '{name}' parameter of {owner} must be a scalar, of shape (2,) or (2, 2). "
             f"Got shape {g.shape} instead."
         )
@@ -312,7 +313,7 @@ class JacobianTransposePD(Controller):
         zeta = check_real(zeta, "zeta", "JacobianTransposePD.from_arm", nonnegative=True)
         freqs = arm.link_frequencies[0]
         if len(freqs) == 0:
-            raise ValueError(
+            raise InvalidValueError(
                 "JacobianTransposePD.from_arm needs a first link with at least one mode."
             )
         w1 = float(freqs[0])
@@ -364,7 +365,7 @@ class CompiledController(Controller):
 
     def __post_init__(self) -> None:
         if not hasattr(self.function, "py_func"):
-            raise TypeError(
+            raise InvalidTypeError(
                 "The 'function' parameter of CompiledController must be a numba.njit "
                 f"function. Got {type(self.function).__name__} instead."
             )

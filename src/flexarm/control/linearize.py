@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_option, check_real
+from ..errors import InvalidTypeError, InvalidValueError
 from ..sensing.sensors import check_sensor
 from .controllers import Controller
 from .signals import measurement_size, reference_size
@@ -105,12 +106,12 @@ def closed_loop_matrix(
         ``position``, motors (flexible joints) at the link angles.
     """
     if arm.n_links != 2:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'arm' parameter of {_OWNER} must have two links (inverse kinematics). "
             f"Got {arm.n_links} links instead."
         )
     if not isinstance(controller, Controller):
-        raise TypeError(
+        raise InvalidTypeError(
             f"The 'controller' parameter of {_OWNER} must be a flexarm Controller. "
             f"Got {type(controller).__name__} instead."
         )

@@ -69,6 +69,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import root
 
 from .._validation import check_array, check_option, check_real
+from ..errors import InvalidTypeError, InvalidValueError
 
 __all__ = [
     "KINDS",
@@ -129,25 +130,29 @@ class Shaper:
         t = check_array(self.times, "times", owner, shape=(-1,))
         if a.dtype.kind == "c" or t.dtype.kind == "c":
             name = "amplitudes" if a.dtype.kind == "c" else "times"
-            raise TypeError(f"The '{name}' parameter of {owner} must be real. Got complex instead.")
+            raise InvalidTypeError(
+                f"The '{name}' parameter of {owner} must be real. Got complex instead."
+            )
         if a.size == 0:
-            raise ValueError(f"The 'amplitudes' parameter of {owner} must be non-empty. Got [].")
+            raise InvalidValueError(
+                f"The 'amplitudes' parameter of {owner} must be non-empty. Got []."
+            )
         if t.shape != a.shape:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'times' parameter of {owner} must be of shape {a.shape} (one time per "
                 f"amplitude). Got shape {t.shape} instead."
             )
         total = float(np.sum(a))
         if abs(total - 1.0) > _SUM_TOL:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'amplitudes' parameter of {owner} must sum to 1. Got sum {total!r} instead."
             )
         if t[0] != 0.0:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'times' parameter of {owner} must start at 0. Got {float(t[0])!r} instead."
             )
         if np.any(np.diff(t) <= 0.0):
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'times' parameter of {owner} must be strictly increasing. Got {t!r} instead."
             )
         object.__setattr__(self, "amplitudes", _frozen(a))
@@ -202,13 +207,13 @@ class Shaper:
         tt = check_array(t, "t", owner, shape=(-1,))
         v = check_array(values, "values", owner)
         if tt.size == 0:
-            raise ValueError(f"The 't' parameter of {owner} must be non-empty. Got [].")
+            raise InvalidValueError(f"The 't' parameter of {owner} must be non-empty. Got [].")
         if np.any(np.diff(tt) <= 0.0):
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 't' parameter of {owner} must be strictly increasing. Got {tt!r} instead."
             )
         if v.ndim == 0 or v.shape[0] != tt.size:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'values' parameter of {owner} must be of shape ({tt.size}, ...) "
                 f"(one row per sample time). Got shape {v.shape} instead."
             )
@@ -243,7 +248,7 @@ class Shaper:
         (array([1.5, 2.5]), array([1., 1.]))
         """
         if not callable(fn):
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'fn' parameter of Shaper.apply_function must be callable. "
                 f"Got {type(fn).__name__} instead."
             )
@@ -270,7 +275,7 @@ class Shaper:
         Impulses that land at the same time (within 1e-12 of the duration) are merged.
         """
         if not isinstance(other, Shaper):
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'other' parameter of Shaper.convolve must be a Shaper. "
                 f"Got {type(other).__name__} instead."
             )
@@ -339,15 +344,17 @@ def residual_vibration(
     """
     owner = "residual_vibration"
     if not isinstance(shaper, Shaper):
-        raise TypeError(
+        raise InvalidTypeError(
             f"The 'shaper' parameter of {owner} must be a Shaper. "
             f"Got {type(shaper).__name__} instead."
         )
     w = check_array(frequency, "frequency", owner)
     if w.dtype.kind == "c":
-        raise TypeError(f"The 'frequency' parameter of {owner} must be real. Got complex instead.")
+        raise InvalidTypeError(
+            f"The 'frequency' parameter of {owner} must be real. Got complex instead."
+        )
     if np.any(w < 0.0):
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'frequency' parameter of {owner} must be >= 0. Got {float(w.min())!r} instead."
         )
     z = _check_damping(damping, owner)
@@ -362,7 +369,9 @@ def residual_vibration(
 def _check_damping(value: Any, owner: str) -> float:
     z = check_real(value, "damping", owner, nonnegative=True)
     if not z < 1.0:
-        raise ValueError(f"The 'damping' parameter of {owner} must be < 1. Got {z!r} instead.")
+        raise InvalidValueError(
+            f"The 'damping' parameter of {owner} must be < 1. Got {z!r} instead."
+        )
     return z
 
 
@@ -444,7 +453,9 @@ def ei(frequency: float, damping: float = 0.0, tolerance: float = 0.05) -> Shape
     w, z, _, period = _design_point(frequency, damping, owner)
     v = check_real(tolerance, "tolerance", owner, positive=True)
     if not v < 1.0:
-        raise ValueError(f"The 'tolerance' parameter of {owner} must be < 1. Got {v!r} instead.")
+        raise InvalidValueError(
+            f"The 'tolerance' parameter of {owner} must be < 1. Got {v!r} instead."
+        )
     if z == 0.0:
         amps = np.array([(1.0 + v) / 4.0, (1.0 - v) / 2.0, (1.0 + v) / 4.0])
         return Shaper(amps, np.array([0.0, 0.5 * period, period]))
@@ -505,7 +516,7 @@ def _ei_unit(z: float, v: float) -> tuple[NDArray[np.float64], NDArray[np.float6
             and 0.0 < xn[5] < 1.0 < xn[6]
         )
         if not ok:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'damping' parameter of ei must be small enough for the EI constraints "
                 f"(tolerance={v!r}) to have a solution; none was found beyond damping "
                 f"{float(zk):.3g}. Got {z!r} instead (use zvd for heavily damped modes)."
@@ -542,7 +553,7 @@ def design(kind: str, frequency: float, damping: float = 0.0, **kw: Any) -> Shap
     allowed = _EXTRA_KEYWORDS[kind]
     for name in kw:
         if name not in allowed:
-            raise TypeError(
+            raise InvalidTypeError(
                 f"design got an unexpected keyword argument {name!r} for kind={kind!r} "
                 f"(allowed: {allowed})."
             )
@@ -580,21 +591,23 @@ def for_modes(
     check_option(kind, "kind", owner, KINDS)
     w = check_array(frequencies, "frequencies", owner, shape=(-1,))
     if w.size == 0:
-        raise ValueError(f"The 'frequencies' parameter of {owner} must be non-empty. Got [].")
+        raise InvalidValueError(
+            f"The 'frequencies' parameter of {owner} must be non-empty. Got []."
+        )
     if w.dtype.kind == "c" or np.any(w <= 0.0):
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'frequencies' parameter of {owner} must be real and > 0. "
             f"Got {frequencies!r} instead."
         )
     z = check_array(damping, "damping", owner)
     if z.dtype.kind == "c" or np.any(z < 0.0) or np.any(z >= 1.0):
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'damping' parameter of {owner} must be real, in [0, 1). Got {damping!r} instead."
         )
     if z.ndim == 0:
         z = np.full(w.shape, float(z))
     elif z.shape != w.shape:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'damping' parameter of {owner} must be a float or of shape {w.shape}. "
             f"Got shape {z.shape} instead."
         )

@@ -41,6 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_int, check_option, check_real, validate_real_fields
+from ..errors import InvalidTypeError, InvalidValueError
 
 __all__ = [
     "Circle",
@@ -96,7 +97,7 @@ class _KinematicArm(Protocol):
 def _point(value: Any, name: str, owner: str) -> tuple[float, float]:
     arr = check_array(value, name, owner, shape=(2,))
     if arr.dtype.kind == "c":
-        raise TypeError(
+        raise InvalidTypeError(
             f"The '{name}' parameter of {owner} must be real. Got a complex array instead."
         )
     return (float(arr[0]), float(arr[1]))
@@ -106,9 +107,11 @@ def _times(t: ArrayLike, owner: str) -> tuple[_F, bool]:
     """``t`` as a float array of shape ``(m,)`` and whether it was a scalar."""
     arr = check_array(t, "t", owner)
     if arr.dtype.kind == "c":
-        raise TypeError(f"The 't' parameter of {owner} must be real. Got a complex array instead.")
+        raise InvalidTypeError(
+            f"The 't' parameter of {owner} must be real. Got a complex array instead."
+        )
     if arr.ndim > 1:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 't' parameter of {owner} must be a scalar or of shape (m,). "
             f"Got shape {arr.shape} instead."
         )
@@ -225,7 +228,7 @@ class Square:
         )
         corner = check_int(self.start_corner, "start_corner", owner, minimum=0)
         if corner > 3:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'start_corner' parameter of {owner} must be one of (0, 1, 2, 3). "
                 f"Got {corner!r} instead."
             )
@@ -490,25 +493,25 @@ class Waypoints:
         tms = check_array(self.times, "times", owner, shape=(-1,))
         for name, arr in (("points", pts), ("times", tms)):
             if arr.dtype.kind == "c":
-                raise TypeError(
+                raise InvalidTypeError(
                     f"The '{name}' parameter of {owner} must be real. Got a complex array instead."
                 )
         if pts.shape[0] < 2:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'points' parameter of {owner} must hold >= 2 points. "
                 f"Got {pts.shape[0]} instead."
             )
         if tms.shape[0] != pts.shape[0]:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'times' parameter of {owner} must be of shape ({pts.shape[0]},), "
                 f"one per point. Got shape {tms.shape} instead."
             )
         if tms[0] < 0.0:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'times' parameter of {owner} must start at >= 0. Got {tms[0]!r} instead."
             )
         if np.any(np.diff(tms) <= 0.0):
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'times' parameter of {owner} must be strictly increasing. "
                 f"Got {tms.tolist()!r} instead."
             )
@@ -548,7 +551,7 @@ class Waypoints:
 # ------------------------------------------------------------------ consumers
 def _check_trajectory(trajectory: Any, owner: str) -> None:
     if not isinstance(trajectory, Trajectory):
-        raise TypeError(
+        raise InvalidTypeError(
             f"The 'trajectory' parameter of {owner} must be a trajectory (with duration, "
             f"corner_times and evaluate). Got {type(trajectory).__name__} instead."
         )
@@ -640,7 +643,7 @@ def joint_reference(
     tol = check_real(singularity_tol, "singularity_tol", owner, positive=True)
     n = int(arm.n_links)
     if n != 2:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'arm' parameter of {owner} must have 2 links. Got {n} links instead."
         )
     tt, scalar = _times(t, owner)
@@ -648,7 +651,7 @@ def joint_reference(
     try:
         theta = arm.inverse_kinematics(pos, elbow=elbow)
     except ValueError as exc:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'trajectory' parameter of {owner} must stay inside the arm's workspace. {exc}"
         ) from exc
     lengths = np.array([float(lk.length) for lk in arm.links])
@@ -656,7 +659,7 @@ def joint_reference(
     near = np.abs(np.linalg.det(jac)) / (lengths[0] * lengths[1])
     if np.any(near < tol):
         k = int(np.argmax(near < tol))
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'trajectory' parameter of {owner} must stay clear of singularities, "
             f"with |det J| / (L1 L2) >= {tol}. Got {near[k]:.3g} at t = {tt[k]} s, at "
             f"{pos[k].tolist()} m ({int(np.sum(near < tol))} samples too close) instead."

@@ -8,6 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import check_int, check_option
+from ..errors import InvalidValueError
 from .compiled import evaluate_many
 from .sets import LeftShoulder, RightShoulder, Rule, Triangle, Variable
 from .system import DEFUZZIFIERS, FuzzySystem
@@ -87,7 +88,7 @@ def plot_surface(fls: FuzzySystem, ax: Any = None, n: int = 101) -> tuple[Any, A
         The axes and the surface (``Poly3DCollection``) or contour set.
     """
     if not isinstance(fls, FuzzySystem) or len(fls.inputs) != 2:
-        raise ValueError(
+        raise InvalidValueError(
             "The 'fls' parameter of plot_surface must be a FuzzySystem with two inputs. "
             f"Got {fls!r} instead."
         )

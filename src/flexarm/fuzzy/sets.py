@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_real
+from ..errors import InvalidTypeError
 
 __all__ = [
     "Gaussian",
@@ -186,7 +187,7 @@ class Gaussian(MembershipFunction):
         return out
 
     def trapezoid(self) -> tuple[float, float, float, float]:
-        raise TypeError("a Gaussian membership function is not piecewise linear")
+        raise InvalidTypeError("a Gaussian membership function is not piecewise linear")
 
     def vertices(self) -> tuple[float, ...]:
         return (self.mean,)
@@ -220,10 +221,12 @@ class Variable:
     def __post_init__(self) -> None:
         owner = "Variable"
         if not isinstance(self.name, str):
-            raise TypeError(f"The 'name' parameter of {owner} must be a str. Got {self.name!r}.")
+            raise InvalidTypeError(
+                f"The 'name' parameter of {owner} must be a str. Got {self.name!r}."
+            )
         u = self.universe
         if not isinstance(u, Sequence) or isinstance(u, str) or len(u) != 2:
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'universe' parameter of {owner} must be a pair (lo, hi). Got {u!r} instead."
             )
         lo = check_real(u[0], "universe", owner)
@@ -232,13 +235,13 @@ class Variable:
             raise _order_error("universe", owner, "(lo, hi) with lo < hi", (lo, hi))  # type: ignore[arg-type]
         object.__setattr__(self, "universe", (lo, hi))
         if not isinstance(self.terms, Mapping) or len(self.terms) == 0:
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'terms' parameter of {owner} must be a non-empty mapping of names to "
                 f"membership functions. Got {self.terms!r} instead."
             )
         for key, mf in self.terms.items():
             if not isinstance(key, str) or not isinstance(mf, MembershipFunction):
-                raise TypeError(
+                raise InvalidTypeError(
                     f"The 'terms' parameter of {owner} must map str to MembershipFunction. "
                     f"Got {key!r}: {type(mf).__name__} instead."
                 )
@@ -264,18 +267,18 @@ class Rule:
         owner = "Rule"
         ante: Any = self.antecedent
         if isinstance(ante, str) or not isinstance(ante, Sequence):
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'antecedent' parameter of {owner} must be a sequence of term names. "
                 f"Got {ante!r} instead."
             )
         if not all(a is None or isinstance(a, str) for a in ante):
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'antecedent' parameter of {owner} must hold str or None. "
                 f"Got {ante!r} instead."
             )
         object.__setattr__(self, "antecedent", tuple(ante))
         if not isinstance(self.consequent, str):
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'consequent' parameter of {owner} must be a str. "
                 f"Got {self.consequent!r} instead."
             )

@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_option, check_sequence_of
+from ..errors import InvalidTypeError, InvalidValueError
 from .compiled import CompiledFuzzySystem
 from .sets import (
     MembershipFunction,
@@ -70,30 +71,30 @@ class FuzzySystem:
         owner = "FuzzySystem"
         inputs = check_sequence_of(self.inputs, "inputs", owner, Variable, "Variable")
         if not inputs:
-            raise ValueError(f"The 'inputs' parameter of {owner} must be non-empty. Got ().")
+            raise InvalidValueError(f"The 'inputs' parameter of {owner} must be non-empty. Got ().")
         object.__setattr__(self, "inputs", inputs)
         if not isinstance(self.output, Variable):
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'output' parameter of {owner} must be a Variable. "
                 f"Got {type(self.output).__name__} instead."
             )
         rules = check_sequence_of(self.rules, "rules", owner, Rule, "Rule")
         if not rules:
-            raise ValueError(f"The 'rules' parameter of {owner} must be non-empty. Got ().")
+            raise InvalidValueError(f"The 'rules' parameter of {owner} must be non-empty. Got ().")
         for k, rule in enumerate(rules):
             if len(rule.antecedent) != len(inputs):
-                raise ValueError(
+                raise InvalidValueError(
                     f"The 'rules' parameter of {owner} must hold rules with one antecedent "
                     f"per input ({len(inputs)}). Got {len(rule.antecedent)} at position {k}."
                 )
             for var, term in zip(inputs, rule.antecedent, strict=True):
                 if term is not None and term not in var.terms:
-                    raise ValueError(
+                    raise InvalidValueError(
                         f"The 'rules' parameter of {owner} must name terms of {var.name!r} "
                         f"{var.term_names}. Got {term!r} at position {k} instead."
                     )
             if rule.consequent not in self.output.terms:
-                raise ValueError(
+                raise InvalidValueError(
                     f"The 'rules' parameter of {owner} must name terms of the output "
                     f"{self.output.term_names}. Got {rule.consequent!r} at position {k} instead."
                 )
@@ -103,12 +104,12 @@ class FuzzySystem:
         check_option(self.aggregation, "aggregation", owner, AGGREGATIONS)
         check_option(self.defuzzifier, "defuzzifier", owner, DEFUZZIFIERS)
         if self.defuzzifier == "mean-of-maxima" and not self.piecewise_linear:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'defuzzifier' parameter of {owner} must be 'centroid' or 'bisector' "
                 "with non-piecewise-linear output sets. Got 'mean-of-maxima' instead."
             )
         if isinstance(self.default, bool) or not isinstance(self.default, (int, float)):
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'default' parameter of {owner} must be a real number (or NaN). "
                 f"Got {self.default!r} instead."
             )
@@ -128,7 +129,7 @@ class FuzzySystem:
 
     def _check_inputs(self, inputs: tuple[ArrayLike, ...], method: str) -> list[FloatArray]:
         if len(inputs) != len(self.inputs):
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'inputs' parameter of FuzzySystem.{method} must be {len(self.inputs)} "
                 f"arrays, one per input variable. Got {len(inputs)} instead."
             )
@@ -137,7 +138,7 @@ class FuzzySystem:
             return list(np.broadcast_arrays(*arrays))
         except ValueError as exc:
             shapes = [a.shape for a in arrays]
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'inputs' parameter of FuzzySystem.{method} must be broadcastable arrays. "
                 f"Got shapes {shapes} instead."
             ) from exc
@@ -297,12 +298,12 @@ class FuzzySystem:
         """
         owner = "FuzzySystem.compiled"
         if self.defuzzifier != "centroid":
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'defuzzifier' parameter of {owner} must be 'centroid'. "
                 f"Got {self.defuzzifier!r} instead."
             )
         if not self.piecewise_linear:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'output' parameter of {owner} must have piecewise-linear sets. "
                 "Got a Gaussian instead."
             )

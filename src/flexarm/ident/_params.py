@@ -7,6 +7,8 @@ from typing import Any, Self
 
 import numpy as np
 
+from ..errors import InvalidValueError
+
 __all__ = ["HyperParameters", "same_value"]
 
 
@@ -46,7 +48,7 @@ class HyperParameters:
         valid = self._get_param_names()
         for name, value in params.items():
             if name not in valid:
-                raise ValueError(
+                raise InvalidValueError(
                     f"Invalid parameter {name!r} for estimator {type(self).__name__}. "
                     f"Valid parameters are: {valid}."
                 )

@@ -45,6 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_int, check_option, check_real
+from ..errors import InvalidTypeError, InvalidValueError
 from .regression import SemiRecursiveKernelRegression
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -299,7 +300,7 @@ def convergence_study(
         def m(x: F64) -> F64:
             out = np.asarray(user(x), dtype=np.float64)
             if out.shape != x.shape or not np.all(np.isfinite(out)):
-                raise ValueError(
+                raise InvalidValueError(
                     f"The 'function' parameter of {_OWNER} must map shape {x.shape} to finite "
                     f"values of the same shape. Got shape {out.shape} instead."
                 )
@@ -308,19 +309,19 @@ def convergence_study(
         p_named = 1.0
         fname = getattr(function, "__name__", "callable")
     else:
-        raise TypeError(
+        raise InvalidTypeError(
             f"The 'function' parameter of {_OWNER} must be a name in {tuple(FUNCTIONS)} or a "
             f"callable. Got {function!r} instead."
         )
     p = p_named if order is None else check_real(order, "order", _OWNER, positive=True)
     sizes = check_array(n, "n", _OWNER, shape=(-1,))
     if sizes.shape[0] < 2 or np.any(sizes < 1) or np.any(sizes != np.round(sizes)):
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'n' parameter of {_OWNER} must be at least two positive integers. "
             f"Got {sizes.tolist()!r} instead."
         )
     if np.any(np.diff(sizes) <= 0):
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'n' parameter of {_OWNER} must be increasing. Got {sizes.tolist()!r} instead."
         )
     ns = sizes.astype(np.int64)
@@ -331,12 +332,12 @@ def convergence_study(
     dec = 1.0 / (2.0 * p + 1.0) if decay is None else check_real(decay, "decay", _OWNER)
     lo, hi = (check_real(v, "interval", _OWNER) for v in interval)
     if not lo < hi:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'interval' parameter of {_OWNER} must have lo < hi. Got {interval!r} instead."
         )
     g = check_int(grid, "grid", _OWNER, minimum=2)
     if progress is not None and not isinstance(progress, bool):
-        raise TypeError(
+        raise InvalidTypeError(
             f"The 'progress' parameter of {_OWNER} must be None or a bool. Got {progress!r} "
             "instead."
         )

@@ -86,6 +86,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_int, check_option, check_real
+from ..errors import InvalidTypeError, InvalidValueError
 from ._params import HyperParameters
 from .kernels import KERNELS
 from .regression import NotFittedError, SemiRecursiveKernelRegression
@@ -135,7 +136,9 @@ def fit_percent(y: ArrayLike, y_hat: ArrayLike) -> float:
     yh = check_array(y_hat, "y_hat", "fit_percent", shape=ya.shape)
     spread = float(np.linalg.norm(ya - ya.mean()))
     if spread == 0.0:
-        raise ValueError("The 'y' parameter of fit_percent must vary. Got a constant instead.")
+        raise InvalidValueError(
+            "The 'y' parameter of fit_percent must vary. Got a constant instead."
+        )
     return 100.0 * (1.0 - float(np.linalg.norm(ya - yh)) / spread)
 
 
@@ -155,10 +158,12 @@ def two_point_normalisation(m1: float, m2: float, phi1: float, phi2: float) -> t
     m1, m2 = check_real(m1, "m1", owner), check_real(m2, "m2", owner)
     phi1, phi2 = check_real(phi1, "phi1", owner), check_real(phi2, "phi2", owner)
     if phi1 == phi2:
-        raise ValueError(f"The 'phi2' parameter of {owner} must differ from phi1. Got {phi2}.")
+        raise InvalidValueError(
+            f"The 'phi2' parameter of {owner} must differ from phi1. Got {phi2}."
+        )
     d1 = (m1 - m2) / (phi1 - phi2)
     if d1 == 0.0:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'm2' parameter of {owner} must differ from m1 (the estimate must separate "
             f"the two points). Got {m2} instead."
         )
@@ -280,12 +285,14 @@ def arma_from_impulse_response(
     L = ha.shape[0]
     need = 2 * max(orders) + 2
     if need > L:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'h' parameter of {owner} must hold >= {need} values for order "
             f"{max(orders)}. Got {L} instead."
         )
     if not np.any(ha != 0.0):
-        raise ValueError(f"The 'h' parameter of {owner} must not be all zero. Got zeros instead.")
+        raise InvalidValueError(
+            f"The 'h' parameter of {owner} must not be all zero. Got zeros instead."
+        )
     floor = 1e-12 * float(np.sum(ha**2))
     crit: dict[int, float] = {}
     rss: dict[int, float] = {}
@@ -328,13 +335,13 @@ def _check_known_points(value: Any) -> tuple[tuple[float, float], tuple[float, f
     except (TypeError, ValueError):
         arr = np.zeros(0)
     if arr.shape != (2, 2) or not np.all(np.isfinite(arr)):
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'known_points' parameter of {_OWNER} must be ((x1, phi(x1)), (x2, phi(x2))), "
             f"four finite numbers. Got {value!r} instead."
         )
     (x1, f1), (x2, f2) = arr.tolist()
     if x1 == x2 or f1 == f2:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'known_points' parameter of {_OWNER} must have x1 != x2 and "
             f"phi(x1) != phi(x2). Got {value!r} instead."
         )
@@ -451,7 +458,7 @@ class HammersteinIdentifier(HyperParameters):
             p["order"] = check_int(self.order, "order", _OWNER, minimum=0)
             top = p["order"]
         if p["n_lags"] < 2 * top + 2:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'n_lags' parameter of {_OWNER} must be >= 2 * order + 2 = {2 * top + 2} "
                 f"to fit ARMA order {top}. Got {p['n_lags']} instead."
             )
@@ -464,7 +471,7 @@ class HammersteinIdentifier(HyperParameters):
             p["bandwidth"] = check_real(self.bandwidth, "bandwidth", _OWNER, positive=True)
         decay = check_real(self.decay, "decay", _OWNER, nonnegative=True)
         if decay > 1.0:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'decay' parameter of {_OWNER} must be <= 1. Got {decay} instead."
             )
         p["decay"] = decay
@@ -480,16 +487,18 @@ class HammersteinIdentifier(HyperParameters):
         for name, value in (("u", u), ("y", y)):
             arr = check_array(value, name, _OWNER)
             if arr.dtype.kind == "c":
-                raise TypeError(f"The '{name}' parameter of {_OWNER} must be real. Got complex.")
+                raise InvalidTypeError(
+                    f"The '{name}' parameter of {_OWNER} must be real. Got complex."
+                )
             if arr.ndim != 1:
-                raise ValueError(
+                raise InvalidValueError(
                     f"The '{name}' parameter of {_OWNER} must be of shape (n,). "
                     f"Got shape {arr.shape} instead."
                 )
             arrays.append(np.ascontiguousarray(arr, dtype=np.float64))
         ua, ya = arrays
         if ya.shape[0] != ua.shape[0]:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'y' parameter of {_OWNER} must have the length of u ({ua.shape[0]}). "
                 f"Got length {ya.shape[0]} instead."
             )
@@ -528,12 +537,12 @@ class HammersteinIdentifier(HyperParameters):
         params = self._validated()
         need = max(params["warmup"], 4 * params["n_lags"])
         if ua.shape[0] < need:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'u' parameter of {_OWNER} must hold at least {need} samples "
                 f"(max(warmup, 4 * n_lags)). Got {ua.shape[0]} instead."
             )
         if np.ptp(ya) == 0.0:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'y' parameter of {_OWNER} must vary with the input. Got a constant output."
             )
         self._reset()
@@ -570,7 +579,7 @@ class HammersteinIdentifier(HyperParameters):
             now = self.get_params()
             changed = sorted(k for k in now if repr(now[k]) != repr(self._frozen[k]))
             if changed:
-                raise ValueError(
+                raise InvalidValueError(
                     f"The {changed} parameter(s) of {_OWNER} changed since the first "
                     "partial_fit. Got new values instead; call fit to start again."
                 )
@@ -595,7 +604,7 @@ class HammersteinIdentifier(HyperParameters):
         p = self._params
         spread = float(np.std(u0))
         if not spread > 0.0:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'u' parameter of {_OWNER} must vary (its spread sets the grid and the "
                 f"bandwidth). Got a constant input over the first {u0.shape[0]} samples instead."
             )
@@ -649,7 +658,7 @@ class HammersteinIdentifier(HyperParameters):
         den = np.array([r.denominator_ for r in self.regressions_])
         valid = np.all(den > 0.0, axis=0)
         if np.count_nonzero(valid) < 2:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'u' parameter of {_OWNER} must spread over the grid. Got samples "
                 "reaching fewer than 2 grid points instead."
             )
@@ -670,7 +679,7 @@ class HammersteinIdentifier(HyperParameters):
         lags = centred @ (w * psi)
         energy = float(lags @ lags)
         if not energy > 0.0 or not np.isfinite(energy):
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'y' parameter of {_OWNER} must depend on u through the chosen instrument "
                 f"({instrument!r}). Got no correlation instead (try instrument='auto')."
             )
@@ -685,13 +694,13 @@ class HammersteinIdentifier(HyperParameters):
             (x1, f1), (x2, f2) = known
             for x in (x1, x2):
                 if not grid[0] <= x <= grid[-1]:
-                    raise ValueError(
+                    raise InvalidValueError(
                         f"The 'known_points' parameter of {_OWNER} must lie within the input's "
                         f"range [{grid[0]:.6g}, {grid[-1]:.6g}]. Got x = {x} instead."
                     )
             s1, s2 = np.interp([x1, x2], grid, shape)
             if s1 == s2:
-                raise ValueError(
+                raise InvalidValueError(
                     f"The 'known_points' parameter of {_OWNER} must name points where the "
                     f"estimate differs. Got equal estimates at x1 = {x1} and x2 = {x2} instead."
                 )

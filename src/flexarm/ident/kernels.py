@@ -41,6 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_option
+from ..errors import InvalidValueError
 
 __all__ = [
     "KERNELS",
@@ -118,7 +119,7 @@ def evaluate_kernel(name: str, u: ArrayLike) -> F64:
     if arr.ndim == 1:
         arr = arr[:, None]
     if arr.ndim != 2:
-        raise ValueError(
+        raise InvalidValueError(
             "The 'u' parameter of evaluate_kernel must be of shape (m, d) or (m,). "
             f"Got shape {arr.shape} instead."
         )

@@ -91,6 +91,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._io import atomic_path
 from .._validation import check_array, check_option, check_real
+from ..errors import InvalidTypeError, InvalidValueError
 from . import binning
 from ._params import HyperParameters, same_value
 from .kernels import (
@@ -305,7 +306,7 @@ class _KernelRegression(HyperParameters):
             return np.full(d, value)
         arr = check_array(bw, "bandwidth", self._owner, shape=(-1,))
         if arr.dtype.kind == "c":
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'bandwidth' parameter of {self._owner} must be real. Got complex instead."
             )
         if arr.shape[0] != d:
@@ -355,7 +356,7 @@ class _KernelRegression(HyperParameters):
     def _check_series(self, code: int, d: int, decay: float, binned: float | None) -> bool:
         value = getattr(self, "series", False)
         if not isinstance(value, bool | np.bool_):
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'series' parameter of {self._owner} must be a bool. Got {value!r} instead."
             )
         if not value:
@@ -377,7 +378,7 @@ class _KernelRegression(HyperParameters):
     def _check_X(self, X: ArrayLike, name: str = "X") -> F64:
         arr = check_array(X, name, self._owner)
         if arr.dtype.kind == "c":
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The '{name}' parameter of {self._owner} must be real. Got complex instead."
             )
         if arr.ndim == 1:
@@ -392,7 +393,7 @@ class _KernelRegression(HyperParameters):
         Xa = self._check_X(X)
         ya = check_array(y, "y", self._owner)
         if ya.dtype.kind == "c":
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'y' parameter of {self._owner} must be real. Got complex instead."
             )
         if ya.ndim != 1:
@@ -561,7 +562,7 @@ class _KernelRegression(HyperParameters):
             now = self.get_params()
             changed = sorted(k for k in now if not same_value(now[k], self._frozen[k]))
             if changed:
-                raise ValueError(
+                raise InvalidValueError(
                     f"The {changed} parameter(s) of {self._owner} changed since the first "
                     "partial_fit. Got new values instead; call fit to start again."
                 )
@@ -816,12 +817,12 @@ class _KernelRegression(HyperParameters):
         flat = u.reshape(-1, Q.shape[1])
         w = np.asarray(self.kernel_(flat), dtype=np.float64)
         if w.shape != (flat.shape[0],):
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'kernel' parameter of {self._owner} must return shape "
                 f"({flat.shape[0]},) for u of shape {flat.shape}. Got shape {w.shape} instead."
             )
         if not np.all(np.isfinite(w)):
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'kernel' parameter of {self._owner} must return finite values. "
                 "Got non-finite values instead."
             )
@@ -901,7 +902,7 @@ class _KernelRegression(HyperParameters):
         """
         self._check_fitted()
         if not isinstance(self.kernel_, str):
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'kernel' parameter of {self._owner} must be a kernel name to save the "
                 f"estimator. Got {self.kernel_!r} instead."
             )
@@ -954,7 +955,7 @@ class _KernelRegression(HyperParameters):
         with np.load(path, allow_pickle=False) as z:
             data = {k: z[k] for k in z.files}
         if int(data.get("format", -1)) != _FORMAT or str(data.get("estimator")) != cls.__name__:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'path' parameter of {cls.__name__}.load must name a file saved by "
                 f"{cls.__name__}.save. Got {data.get('estimator', 'another file')!s} instead."
             )

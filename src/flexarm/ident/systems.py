@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_real, validate_real_fields
+from ..errors import InvalidTypeError, InvalidValueError
 
 __all__ = [
     "ARMA",
@@ -179,7 +180,7 @@ class HardLimiter:
         for name in ("low", "high", "threshold"):
             object.__setattr__(self, name, check_real(getattr(self, name), name, "HardLimiter"))
         if not self.low < self.high:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'high' parameter of HardLimiter must be > low = {self.low}. "
                 f"Got {self.high} instead."
             )
@@ -265,12 +266,12 @@ class PiecewiseLinear:
         bp = check_array(self.breakpoints, "breakpoints", owner, shape=(-1,))
         vals = check_array(self.values, "values", owner, shape=(-1,))
         if bp.shape[0] < 2 or not np.all(np.diff(bp) > 0):
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'breakpoints' parameter of {owner} must be strictly increasing with "
                 f"at least 2 entries. Got {tuple(bp.tolist())} instead."
             )
         if vals.shape != bp.shape:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'values' parameter of {owner} must have {bp.shape[0]} entries like "
                 f"breakpoints. Got {vals.shape[0]} instead."
             )
@@ -298,23 +299,27 @@ def _check_coefficients(a: ArrayLike, b: ArrayLike, owner: str) -> tuple[F64, F6
     bb = check_array(b, "b", owner)
     if aa.dtype.kind == "c" or bb.dtype.kind == "c":
         name = "a" if aa.dtype.kind == "c" else "b"
-        raise TypeError(f"The '{name}' parameter of {owner} must be real. Got complex instead.")
+        raise InvalidTypeError(
+            f"The '{name}' parameter of {owner} must be real. Got complex instead."
+        )
     aa = np.atleast_1d(aa).astype(np.float64)
     bb = np.atleast_1d(bb).astype(np.float64)
     if aa.ndim != 1:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'a' parameter of {owner} must be of shape (p,). Got shape {aa.shape} instead."
         )
     if bb.ndim != 1 or bb.shape[0] < 1:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'b' parameter of {owner} must be of shape (q + 1,) with q >= 0. "
             f"Got shape {bb.shape} instead."
         )
     if not np.any(bb != 0.0):
-        raise ValueError(f"The 'b' parameter of {owner} must not be all zero. Got {bb!r} instead.")
+        raise InvalidValueError(
+            f"The 'b' parameter of {owner} must not be all zero. Got {bb!r} instead."
+        )
     radius = spectral_radius(aa)
     if not radius < 1.0:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'a' parameter of {owner} must give a stable ARMA system (every root of "
             f"z**p - a1 z**(p-1) - ... - ap strictly inside the unit circle). Got "
             f"{aa.tolist()} instead, with a root of modulus {radius:.6g}."
@@ -405,7 +410,7 @@ class ARMA:
     def impulse_response(self, n: int) -> F64:
         """``lambda_0, ..., lambda_{n-1}``: the response to a unit impulse, shape (n,)."""
         if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'n' parameter of ARMA.impulse_response must be >= 1. Got {n!r} instead."
             )
         delta = np.zeros(int(n))
@@ -431,7 +436,7 @@ def as_generator(rng: Any, owner: str) -> np.random.Generator:
         return np.random.default_rng(None if rng is None else int(rng))
     if isinstance(rng, np.random.Generator):
         return rng
-    raise TypeError(
+    raise InvalidTypeError(
         f"The 'rng' parameter of {owner} must be a numpy Generator, an int seed or None. "
         f"Got {type(rng).__name__} instead."
     )
@@ -478,27 +483,27 @@ def simulate_hammerstein(
     """
     owner = "simulate_hammerstein"
     if not callable(phi):
-        raise TypeError(
+        raise InvalidTypeError(
             f"The 'phi' parameter of {owner} must be a callable. Got {type(phi).__name__} instead."
         )
     aa, bb = _check_coefficients(a, b, owner)
     ua = check_array(u, "u", owner, shape=(-1,))
     if ua.dtype.kind == "c":
-        raise TypeError(f"The 'u' parameter of {owner} must be real. Got complex instead.")
+        raise InvalidTypeError(f"The 'u' parameter of {owner} must be real. Got complex instead.")
     if ua.shape[0] == 0:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'u' parameter of {owner} must hold at least 1 sample. Got 0 instead."
         )
     sigma = check_real(noise_std, "noise_std", owner, nonnegative=True)
     gen = as_generator(rng, owner)
     w = np.asarray(phi(ua), dtype=np.float64)
     if w.shape != ua.shape:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'phi' parameter of {owner} must return an array of the input's shape "
             f"{ua.shape}. Got shape {w.shape} instead."
         )
     if not np.all(np.isfinite(w)):
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'phi' parameter of {owner} must return finite values. "
             "Got non-finite values instead."
         )

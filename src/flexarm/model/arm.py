@@ -86,6 +86,7 @@ from .._validation import (
     check_sequence_of,
     validate_real_fields,
 )
+from ..errors import InvalidTypeError, InvalidValueError
 from . import dynamics as kernels
 from .joints import LinearJoint, NonlinearJoint
 from .link import Link
@@ -150,7 +151,7 @@ class FlexibleArm:
         set_ = object.__setattr__
         links = check_sequence_of(self.links, "links", _OWNER, Link, "Link")
         if len(links) == 0:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'links' parameter of {_OWNER} must hold >= 1 Link. Got 0 instead."
             )
         set_(self, "links", links)
@@ -160,7 +161,7 @@ class FlexibleArm:
             set_(self, "joints", self._check_joints(self.joints, len(links)))
         check_option(self.joint_friction, "joint_friction", _OWNER, FRICTION_SIDES)
         if not isinstance(self.rotor_coupling, bool):
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'rotor_coupling' parameter of {_OWNER} must be a bool. "
                 f"Got {self.rotor_coupling!r} instead."
             )
@@ -204,7 +205,7 @@ class FlexibleArm:
         what = "LinearJoint or NonlinearJoint"
         joints = check_sequence_of(joints, "joints", _OWNER, (LinearJoint, NonlinearJoint), what)
         if len(joints) != n_links:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'joints' parameter of {_OWNER} must hold one joint per link "
                 f"({n_links}). Got {len(joints)} instead."
             )
@@ -381,7 +382,7 @@ class FlexibleArm:
     def _check_link(self, link: int) -> int:
         link = check_int(link, "link", _OWNER, minimum=0)
         if link >= self.n_links:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'link' parameter of {_OWNER} must be < {self.n_links} (0-based). "
                 f"Got {link} instead."
             )
@@ -393,7 +394,7 @@ class FlexibleArm:
     def _check_batch_q(self, q: ArrayLike) -> NDArray[Any]:
         arr = check_array(q, "q", _OWNER)
         if arr.ndim not in (1, 2) or arr.shape[-1] != self.n_dof:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'q' parameter of {_OWNER} must be of shape ({self.n_dof},) or "
                 f"(m, {self.n_dof}). Got shape {arr.shape} instead."
             )
@@ -647,7 +648,7 @@ class FlexibleArm:
         L = self.links[link].length
         distance = check_real(distance, "distance", _OWNER)
         if not 0.0 <= distance <= L:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'distance' parameter of {_OWNER} must lie in [0, {L}] for link {link}. "
                 f"Got {distance} instead."
             )
@@ -678,7 +679,7 @@ class FlexibleArm:
     def _check_theta(self, theta: ArrayLike) -> NDArray[np.float64]:
         arr = check_array(theta, "theta", _OWNER)
         if arr.ndim not in (1, 2) or arr.shape[-1] != self.n_links:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'theta' parameter of {_OWNER} must be of shape ({self.n_links},) or "
                 f"(m, {self.n_links}). Got shape {arr.shape} instead."
             )
@@ -736,13 +737,13 @@ class FlexibleArm:
             If the arm does not have two links or a target is out of reach.
         """
         if self.n_links != 2:
-            raise ValueError(
+            raise InvalidValueError(
                 f"inverse_kinematics needs a two-link arm. Got {self.n_links} links instead."
             )
         check_option(elbow, "elbow", _OWNER, ("positive", "negative"))
         p = check_array(position, "position", _OWNER)
         if p.ndim not in (1, 2) or p.shape[-1] != 2:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'position' parameter of {_OWNER} must be of shape (2,) or (m, 2). "
                 f"Got shape {p.shape} instead."
             )
@@ -754,7 +755,7 @@ class FlexibleArm:
         bad = (c2 > 1 + tol) | (c2 < -1 - tol)
         if np.any(bad):
             r = np.sqrt(np.atleast_1d(r2)[np.atleast_1d(bad)][0])
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'position' parameter of {_OWNER} must be reachable, at a distance in "
                 f"[{abs(l1 - l2)}, {l1 + l2}] m from the base. Got a target at {r} m "
                 f"({int(np.sum(bad))} unreachable)."

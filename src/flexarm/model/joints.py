@@ -70,6 +70,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import validate_real_fields
+from ..errors import InvalidTypeError, InvalidValueError
 
 __all__ = ["Joint", "LinearJoint", "MakkarFriction", "NonlinearJoint"]
 
@@ -77,7 +78,7 @@ __all__ = ["Joint", "LinearJoint", "MakkarFriction", "NonlinearJoint"]
 def _as_float_array(x: ArrayLike, name: str, owner: str) -> NDArray[np.float64]:
     arr = np.asarray(x, dtype=float)
     if arr.dtype.kind != "f":  # pragma: no cover - asarray(float) guarantees it
-        raise TypeError(f"The '{name}' parameter of {owner} must be numeric.")
+        raise InvalidTypeError(f"The '{name}' parameter of {owner} must be numeric.")
     return arr
 
 
@@ -251,7 +252,7 @@ class NonlinearJoint:
             nonnegative=("a2", "ksw", "motor_damping"),
         )
         if not self.a1 > self.ksw:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'ksw' parameter of {owner} must be < a1 = {self.a1} (stiffness "
                 f"a1 - ksw must be positive at zero deflection). Got {self.ksw} instead."
             )
@@ -300,7 +301,7 @@ Joint = LinearJoint | NonlinearJoint
 
 def _check_friction(friction: object, owner: str) -> None:
     if friction is not None and not isinstance(friction, MakkarFriction):
-        raise TypeError(
+        raise InvalidTypeError(
             f"The 'friction' parameter of {owner} must be a MakkarFriction or None. "
             f"Got {type(friction).__name__} instead."
         )

@@ -68,6 +68,7 @@ from .._validation import (
     check_real,
     validate_real_fields,
 )
+from ..errors import InvalidValueError
 
 __all__ = [
     "NORMALIZATIONS",
@@ -378,13 +379,13 @@ class BeamModes:
         order = check_int(order, "order", "BeamModes.derivative", minimum=0)
         xa = np.atleast_1d(check_array(x, "x", "BeamModes.derivative"))
         if xa.ndim != 1:
-            raise ValueError(
+            raise InvalidValueError(
                 "The 'x' parameter of BeamModes.derivative must be a scalar or 1-D. "
                 f"Got shape {xa.shape} instead."
             )
         L = self.length
         if np.any(xa < -1e-12 * L) or np.any(xa > L * (1 + 1e-12)):
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'x' parameter of BeamModes.derivative must lie in [0, {L}]. "
                 f"Got values in [{xa.min()}, {xa.max()}] instead."
             )

@@ -81,6 +81,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
 from .._validation import check_array, check_int, check_option, check_real, validate_real_fields
+from ..errors import InvalidTypeError, InvalidValueError
 
 __all__ = [
     "DELAY_METHODS",
@@ -251,7 +252,7 @@ def discretize(
     a = check_array(A, "A", owner, shape=(-1, -1))
     n = a.shape[0]
     if a.shape != (n, n):
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'A' parameter of {owner} must be square. Got shape {a.shape} instead."
         )
     b = check_array(B, "B", owner, shape=(n, -1))
@@ -261,7 +262,9 @@ def discretize(
     dd = check_array(D, "D", owner, shape=(p, m))
     for name, arr in (("A", a), ("B", b), ("C", c), ("D", dd)):
         if arr.dtype.kind == "c":
-            raise TypeError(f"The '{name}' parameter of {owner} must be real. Got complex instead.")
+            raise InvalidTypeError(
+                f"The '{name}' parameter of {owner} must be real. Got complex instead."
+            )
     h = check_real(dt, "dt", owner, positive=True)
     big = np.zeros((n + m, n + m))
     big[:n, :n] = a
@@ -325,7 +328,7 @@ class DelayModel:
         if self.delay == 0.0:
             return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.ones((1, 1))
         if self.method != "pade":
-            raise ValueError(
+            raise InvalidValueError(
                 "The 'method' parameter of DelayModel must be 'pade' for a state-space "
                 f"realisation of a nonzero delay. Got {self.method!r} instead."
             )
@@ -429,14 +432,14 @@ def travel_delay(
     if model == "seed":
         for name, value in beam.items():
             if value is not None:
-                raise ValueError(
+                raise InvalidValueError(
                     f"The '{name}' parameter of {owner} must be None when model='seed' "
                     f"(the seed speed is fixed). Got {value!r} instead."
                 )
         return wave_delay(distance, SEED_WAVE_SPEED)
     for name, value in beam.items():
         if value is None:
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The '{name}' parameter of {owner} must be a real number > 0 when "
                 f"model='dispersive'. Got None instead."
             )

@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import check_int, check_real, validate_real_fields
+from ..errors import InvalidTypeError, InvalidValueError
 
 __all__ = ["JointSensor", "PointSensor", "Sensor", "TipSensor", "check_sensor", "parse_sensor"]
 
@@ -99,13 +100,13 @@ class PointSensor:
 
     def resolve(self, arm: Any) -> tuple[int, float, NDArray[np.float64]]:
         if self.link >= arm.n_links:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'link' parameter of PointSensor must be < {arm.n_links} (0-based). "
                 f"Got {self.link} instead."
             )
         length = arm.links[self.link].length
         if self.distance > length:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'distance' parameter of PointSensor must be <= {length} m (link "
                 f"{self.link}'s length). Got {self.distance} instead."
             )
@@ -156,7 +157,7 @@ def check_sensor(sensor: Any, owner: str) -> Sensor:
     if sensor is None:
         return JointSensor()
     if not isinstance(sensor, JointSensor | PointSensor | TipSensor):
-        raise TypeError(
+        raise InvalidTypeError(
             f"The 'sensor' parameter of {owner} must be a JointSensor, PointSensor or "
             f"TipSensor. Got {type(sensor).__name__} instead."
         )
@@ -170,14 +171,16 @@ def parse_sensor(spec: str, **noise: float) -> Sensor:
     """A sensor from its command-line form: ``joint``, ``tip`` or ``point:LINK:DISTANCE``
     (link 0-based, distance in m: ``point:1:0.5`` is 0.5 m from the elbow)."""
     if not isinstance(spec, str):
-        raise TypeError(f"The 'sensor' parameter must be a str. Got {type(spec).__name__} instead.")
+        raise InvalidTypeError(
+            f"The 'sensor' parameter must be a str. Got {type(spec).__name__} instead."
+        )
     if spec == "joint":
         return JointSensor(**noise)
     if spec == "tip":
         return TipSensor(**noise)
     m = _POINT.match(spec)
     if m is None:
-        raise ValueError(
+        raise InvalidValueError(
             "The 'sensor' parameter must be 'joint', 'tip' or 'point:LINK:DISTANCE'. "
             f"Got {spec!r} instead."
         )
@@ -185,7 +188,7 @@ def parse_sensor(spec: str, **noise: float) -> Sensor:
         link = int(m["link"])
         distance = float(m["distance"])
     except ValueError:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'sensor' parameter 'point:LINK:DISTANCE' needs an integer link and a "
             f"distance in m. Got {spec!r} instead."
         ) from None

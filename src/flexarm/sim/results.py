@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._io import atomic_path
+from ..errors import InvalidValueError
 from . import metrics as _m
 
 __all__ = ["SimulationResult"]
@@ -203,9 +204,9 @@ class SimulationResult:
         except FileNotFoundError:
             raise
         except Exception as exc:
-            raise ValueError(f"{path} is not a flexarm simulation result: {exc}") from exc
+            raise InvalidValueError(f"{path} is not a flexarm simulation result: {exc}") from exc
         if meta.get("format") != _FORMAT:
-            raise ValueError(f"{path} is not a flexarm simulation result (format field).")
+            raise InvalidValueError(f"{path} is not a flexarm simulation result (format field).")
         return cls(**arrays, coordinate_names=list(meta["coordinate_names"]), info=meta["info"])
 
     # ------------------------------------------------------------------ plots

@@ -129,6 +129,7 @@ from ..control.adaptive import FuzzyAdaptiveJTPD
 from ..control.controllers import Controller, JacobianTransposePD, JointPD
 from ..control.shapers import Shaper, design, for_modes
 from ..control.trajectories import ELBOWS, Circle, Line, PointToPoint, Square, Waypoints
+from ..errors import InvalidValueError
 from ..model.arm import FlexibleArm
 from ..model.joints import LinearJoint, MakkarFriction, NonlinearJoint
 from ..model.link import Link
@@ -188,7 +189,7 @@ _NOISE_KEYS = ("noise_std", "rate_noise_std", "quantization", "rate_quantization
 _PARAMETER = re.compile(r"The '(\w+)' parameter")
 
 
-class ScenarioError(ValueError):
+class ScenarioError(InvalidValueError):
     """A scenario that cannot be built.
 
     Attributes
@@ -394,7 +395,7 @@ class SimulationSettings:
         if self.torque_limit is not None:
             limit = check_array(self.torque_limit, "torque_limit", owner, finite=False)
             if limit.ndim > 1 or limit.dtype.kind == "c" or not np.all(limit > 0):
-                raise ValueError(
+                raise InvalidValueError(
                     f"The 'torque_limit' parameter of {owner} must be > 0, a scalar or one per "
                     f"joint. Got {self.torque_limit!r} instead."
                 )

@@ -36,6 +36,7 @@ from .._validation import check_array, check_int, check_option, check_real
 from ..control.controllers import Controller, JacobianTransposePD
 from ..control.signals import measurement_size, reference_size
 from ..control.trajectories import Square
+from ..errors import InvalidTypeError, InvalidValueError
 from ..model import dynamics as kernels
 from ..sensing.delays import DelayModel, discretize, pade_state_space
 from ..sensing.sensors import Sensor, check_sensor
@@ -82,7 +83,7 @@ def _joint_references(
     scale = l1 * l2
     if np.any(np.abs(det) < 1e-6 * scale):
         k = int(np.argmin(np.abs(det)))
-        raise ValueError(
+        raise InvalidValueError(
             "The trajectory passes through a kinematic singularity (elbow straight or "
             f"folded) at {position[k].tolist()} m: joint rates are unbounded there."
         )
@@ -191,21 +192,21 @@ def simulate(
     """
     controller = JacobianTransposePD.from_arm(arm) if controller is None else controller
     if not isinstance(controller, Controller):
-        raise TypeError(
+        raise InvalidTypeError(
             f"The 'controller' parameter of {_OWNER} must be a flexarm Controller. "
             f"Got {type(controller).__name__} instead."
         )
     trajectory = Square() if trajectory is None else trajectory
     for attr in ("evaluate", "duration"):
         if not hasattr(trajectory, attr):
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The 'trajectory' parameter of {_OWNER} must have '{attr}'. "
                 f"Got {type(trajectory).__name__} instead."
             )
     sensor = check_sensor(sensor, _OWNER)
     delay = DelayModel.none() if delay is None else delay
     if not isinstance(delay, DelayModel):
-        raise TypeError(
+        raise InvalidTypeError(
             f"The 'delay' parameter of {_OWNER} must be a DelayModel. "
             f"Got {type(delay).__name__} instead."
         )
@@ -216,21 +217,21 @@ def simulate(
     check_option(method, "method", _OWNER, ("rk4", "scipy"))
     check_option(elbow, "elbow", _OWNER, ("positive", "negative"))
     if not isinstance(delay_reference, bool):
-        raise TypeError(
+        raise InvalidTypeError(
             f"The 'delay_reference' parameter of {_OWNER} must be a bool. "
             f"Got {delay_reference!r} instead."
         )
     if rng is None or isinstance(rng, int | np.integer):
         rng = np.random.default_rng(rng)
     elif not isinstance(rng, np.random.Generator):
-        raise TypeError(
+        raise InvalidTypeError(
             f"The 'rng' parameter of {_OWNER} must be a numpy Generator or a seed. "
             f"Got {type(rng).__name__} instead."
         )
     N, n = arm.n_links, arm.n_dof
     n_steps = round(duration / dt)
     if n_steps < 1:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'duration' parameter of {_OWNER} must cover at least one control period "
             f"({dt} s). Got {duration} instead."
         )
@@ -257,7 +258,7 @@ def simulate(
         # it: rigid kinematics of the joint references (paper.md §4: e = x_c - x with x
         # the sensed point). Errors are still measured at the end effector.
         if N != 2:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'sensor' parameter of {_OWNER} may be a point short of the end "
                 f"effector only on a two-link arm (its command needs inverse kinematics). "
                 f"Got {sensor!r} on a {N}-link arm instead."
@@ -283,7 +284,7 @@ def simulate(
         limit = check_array(torque_limit, "torque_limit", _OWNER, finite=False)
         limit = np.broadcast_to(limit, (N,)).astype(float).copy() if limit.ndim == 0 else limit
         if limit.shape != (N,) or np.any(np.isnan(limit)) or np.any(limit <= 0):
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'torque_limit' parameter of {_OWNER} must be > 0, scalar or of shape "
                 f"({N},). Got {torque_limit!r} instead."
             )
@@ -520,7 +521,7 @@ def _run_scipy(
     from scipy.integrate import solve_ivp
 
     if sensor.delay_steps[0] or sensor.pade_ad.shape[0] or sensor.noise.shape[0]:
-        raise ValueError(
+        raise InvalidValueError(
             "The 'method' parameter of simulate='scipy' supports undelayed, noise-free "
             "sensing only (it is the integrator's accuracy reference)."
         )

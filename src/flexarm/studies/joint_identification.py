@@ -82,6 +82,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._io import atomic_path
 from .._validation import check_int, check_option, check_real, validate_real_fields
 from ..control.controllers import CompiledController
+from ..errors import InvalidTypeError, InvalidValueError
 from ..ident.hammerstein import HammersteinIdentifier, fit_percent
 from ..ident.regression import SemiRecursiveKernelRegression
 from ..ident.systems import as_generator
@@ -174,12 +175,12 @@ class JointExcitation:
             self, "JointExcitation", positive=("duration", "dt", "hold", "amplitude")
         )
         if not isinstance(self.drive, DriveNonlinearity):
-            raise TypeError(
+            raise InvalidTypeError(
                 "The 'drive' parameter of JointExcitation must be a DriveNonlinearity. "
                 f"Got {type(self.drive).__name__} instead."
             )
         if self.hold < self.dt:
-            raise ValueError(
+            raise InvalidValueError(
                 f"The 'hold' parameter of JointExcitation must be >= dt = {self.dt}. "
                 f"Got {self.hold} instead."
             )
@@ -584,12 +585,12 @@ def identify_joint(
     """
     arm = joint_test_arm() if arm is None else arm
     if not isinstance(arm, FlexibleArm):
-        raise TypeError(
+        raise InvalidTypeError(
             f"The 'arm' parameter of {_OWNER} must be a FlexibleArm. "
             f"Got {type(arm).__name__} instead."
         )
     if arm.n_links != 1 or arm.joints is None or arm.n_modes != (0,):
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'arm' parameter of {_OWNER} must be one rigid link (n_modes=0) on a "
             f"flexible joint. Got {arm.n_links} link(s), modes {arm.n_modes}, "
             f"joints {'none' if arm.joints is None else 'flexible'} instead."
@@ -601,7 +602,7 @@ def identify_joint(
         ("sensors", sensors, JointSensors),
     ):
         if not isinstance(value, kind):
-            raise TypeError(
+            raise InvalidTypeError(
                 f"The '{name}' parameter of {_OWNER} must be a {kind.__name__}. "
                 f"Got {type(value).__name__} instead."
             )
@@ -610,7 +611,7 @@ def identify_joint(
         quasi_static_fraction, "quasi_static_fraction", _OWNER, positive=True
     )
     if quasi_static_fraction > 1.0:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'quasi_static_fraction' parameter of {_OWNER} must be <= 1. "
             f"Got {quasi_static_fraction} instead."
         )
@@ -622,7 +623,7 @@ def identify_joint(
     n_lags = check_int(n_lags, "n_lags", _OWNER, minimum=10)
     validation_fraction = check_real(validation_fraction, "validation_fraction", _OWNER)
     if not 0.0 < validation_fraction < 1.0:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'validation_fraction' parameter of {_OWNER} must be in (0, 1). "
             f"Got {validation_fraction} instead."
         )
@@ -634,7 +635,7 @@ def identify_joint(
     n_steps = round(excitation.duration / dt)
     n_holds = n_steps // steps
     if n_holds < 4 * n_lags or n_holds < 300:
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'excitation' parameter of {_OWNER} must give at least "
             f"{max(4 * n_lags, 300)} holds (duration / hold). Got {n_holds} instead."
         )

@@ -42,6 +42,7 @@ from .._io import json_ready, output_directory
 from .._validation import check_int, check_option, check_real
 from ..control.adaptive import ADAPTATION_LAWS
 from ..control.linearize import closed_loop_poles
+from ..errors import InvalidValueError
 from ..sim.results import SimulationResult
 from ..sim.scenario import Scenario
 from ..sim.simulate import SimulationError, simulate
@@ -602,7 +603,7 @@ def reproduce(
     law_values = tuple(check_option(x, "laws", owner, ADAPTATION_LAWS) for x in laws)
     delay_values = tuple(check_option(x, "delays", owner, DELAY_CASES) for x in delays)
     if sensitivity and not (ks_values and law_values and delay_values):
-        raise ValueError(
+        raise InvalidValueError(
             f"The 'ks_range', 'laws' and 'delays' parameters of {owner} must be non-empty "
             "when sensitivity is on. Got an empty one instead."
         )
