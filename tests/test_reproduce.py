@@ -1,17 +1,23 @@
 """``flexarm reproduce`` on a short horizon: every promised artefact, the claims,
-neutral adaptation equal to the nonadaptive runs, and bad options."""
+neutral adaptation equal to the nonadaptive runs, figures with units, bad options;
+and the verdict logic on hand-made case lists, expected verdicts written from the
+stated rule."""
 
 from __future__ import annotations
 
 import csv
 import json
 import re
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
 from flexarm.cli import main
-from flexarm.studies.reproduction import OUTPUT_FILES, SENSOR_CASES, reproduce
+from flexarm.studies.reproduction import OUTPUT_FILES, SENSOR_CASES, RunMatrix, reproduce
+from flexarm.studies.reproduction.cases import Case, CaseResult
+from flexarm.studies.reproduction.verdicts import claims, tracks_well, verdict
 
 SHORT = ("--duration", "0.15", "--ks-range", "0,10", "--workers", "2")
 
@@ -54,19 +60,29 @@ def test_delay_models_give_the_travel_delays(study):
     assert by[("tip", "dispersive")] > by[("tip", "seed")]  # bending waves are slower
 
 
+def test_shared_runs_are_run_once(study):
+    # 6 matrix runs; the "none" delay study is the matrix; "seed" and "dispersive" add 6
+    # each; the ks study (0 and 10, two laws, three sensors) shares none of them
+    assert study.settings["runs"] == 6 + 2 * 6 + 2 * 2 * 3
+
+
+def test_run_matrix_lists_and_deduplicates():
+    runs = RunMatrix.build(
+        ks=1.0, law="scaled", ks_range=(0.0, 1.0), laws=("scaled",), delays=("none", "seed")
+    )
+    assert (len(runs.matrix), len(runs.delay_study), len(runs.ks_study)) == (6, 12, 6)
+    # new: the 6 seed-delay runs and the 3 fuzzy runs at ks = 0 (ks = 1 scaled is the matrix)
+    assert len(runs.unique()) == 6 + 6 + 3
+    assert Case("pd", "tip", ks=0.0, law="damping").key() == Case("pd", "tip").key()
+    assert Case("fuzzy", "tip", ks=0.0).key() != Case("fuzzy", "tip").key()
+    assert RunMatrix.build(ks=1.0, law="scaled").unique() == {c.key(): c for c in runs.matrix}
+
+
 def test_claims_state_a_verdict_with_numbers(study):
     assert len(study.claims) == 4
     for claim in study.claims:
         assert claim["verdict"] in {"supported", "partly supported", "not supported"}
         assert re.search(r"\d", claim["evidence"])
-
-
-def test_claim_verdicts_follow_the_stated_tolerance(study):
-    tol = study.settings["tolerance_m"]
-    fuzzy = [c for c in study.cases if c.case.controller == "fuzzy"]
-    good = sum(c.status == "ok" and c.rms <= tol for c in fuzzy)
-    expected = {3: "supported", 0: "not supported"}.get(good, "partly supported")
-    assert study.claims[1]["verdict"] == expected
 
 
 def test_write_produces_every_artefact_at_once(study, tmp_path):
@@ -148,3 +164,225 @@ def test_cli_refuses_a_non_empty_out(capsys, tmp_path):
 def test_bad_study_parameters(kwargs, match):
     with pytest.raises(ValueError, match=match):
         reproduce(duration=0.01, **kwargs)
+
+
+# ---------------------------------------------------------------- figures
+UNIT_LABEL = re.compile(r"^\S.* \([^()]+\)$")  # "quantity (unit)"
+
+
+def assert_labels_have_units(fig):
+    for ax in fig.axes:
+        for label in (ax.get_xlabel(), ax.get_ylabel()):
+            assert label == "" or UNIT_LABEL.match(label), label
+
+
+def test_figures_draw_on_new_or_given_figures_with_units(study):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
+
+    for name, panels in (("plot_tracking", 6), ("plot_deflections", 6), ("plot_sensitivity", 3)):
+        fig = getattr(study, name)()
+        assert isinstance(fig, Figure) and len(fig.axes) == panels
+        assert all(ax.get_xlabel() for ax in fig.axes)
+        assert_labels_have_units(fig)
+        given = Figure()
+        assert getattr(study, name)(given) is given and len(given.axes) == panels
+    assert study.plot_tracking().axes[0].get_xlabel() == "x (m)"
+    assert study.plot_deflections().axes[0].get_ylabel() == "tip deflection (mm)"
+    assert study.plot_sensitivity().axes[0].get_ylabel() == "RMS error (m)"
+    ax, artist = study.plot_surface()
+    assert ax.name == "3d" and artist is not None
+    assert (ax.get_xlabel(), ax.get_ylabel(), ax.get_zlabel()) == ("δ1 (m)", "δ2 (m)", "λ (-)")
+    plt.close("all")
+
+
+def test_the_text_summary_lists_the_matrix_and_the_verdicts(study):
+    text = study.text()
+    assert text.startswith(f"{study.settings['runs']} runs in ")
+    assert len([ln for ln in text.splitlines() if ln.startswith("  nonadaptive ")]) == 3
+    for claim in study.claims:
+        assert f"{claim['claim']}: {claim['verdict'].upper()}" in text
+
+
+# ------------------------------------------------------------ light imports
+def test_the_command_line_and_the_report_load_no_simulator():
+    """`flexarm reproduce --help` and the verdicts/report modules need no Numba or Matplotlib."""
+    code = """
+import importlib.util, sys, types
+spec = importlib.util.find_spec("flexarm.cli")  # imports flexarm (light), not flexarm.cli
+pkg = types.ModuleType("flexarm.cli")
+pkg.__path__ = list(spec.submodule_search_locations)
+sys.modules["flexarm.cli"] = pkg  # skip the other commands' imports
+import flexarm.cli._common as common
+import flexarm.cli.reproduce as cli
+import flexarm.studies.reproduction as rep
+import flexarm.studies.reproduction.report, flexarm.studies.reproduction.verdicts
+parser = common.Parser(prog="flexarm")
+cli.add_parser(parser.add_subparsers())
+assert parser.parse_args(["reproduce", "--law", "damping"]).law == "damping"
+assert rep.OUTPUT_FILES and rep.SENSOR_CASES
+heavy = [m for m in sys.modules if m.split(".")[0] in ("numba", "matplotlib")
+         or m in ("flexarm.sim.simulate", "flexarm.studies.reproduction.experiment")]
+assert not heavy, heavy
+"""
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert res.returncode == 0, res.stderr
+
+
+def test_the_light_constants_match_the_controller():
+    from flexarm.control.adaptive import ADAPTATION_LAWS
+    from flexarm.studies.reproduction import cases
+
+    assert cases.ADAPTATION_LAWS == ADAPTATION_LAWS
+
+
+# ------------------------------------------------- verdicts on hand-made cases
+# The stated rule: a run tracks well when it completes (no divergence) and its RMS
+# error is <= the tolerance; a claim is "supported" when it holds for every run or
+# sensor it is about, "not supported" for none, "partly supported" otherwise.
+TOL = 0.2  # m
+DIVERGED = None
+
+
+def outcome(controller, sensor, rms, *, ks=1.0, law="scaled"):
+    """A case result built by hand; ``rms=DIVERGED`` is a run that diverged at 0.01 s."""
+    case = Case(controller, sensor, ks=ks, law=law)
+    if rms is DIVERGED:
+        metrics = {"sim_time_s": 0.01, "wall_time_s": 0.0}
+        return CaseResult(case, "diverged", 0.01, metrics, 0.0, 5.0, result=None)
+    metrics = {"rms_error_m": rms, "max_error_m": 2 * rms}
+    return CaseResult(case, "ok", None, metrics, 0.0, -5.0, result=None)
+
+
+def matrix(pd, fuzzy):
+    """The paper's matrix from RMS errors per sensor (joint, tip, elbow), pd then fuzzy."""
+    return [outcome("pd", s, r) for s, r in zip(SENSOR_CASES, pd, strict=True)] + [
+        outcome("fuzzy", s, r) for s, r in zip(SENSOR_CASES, fuzzy, strict=True)
+    ]
+
+
+@pytest.mark.parametrize(
+    ("hits", "total", "expected"),
+    [
+        (3, 3, "supported"),
+        (0, 3, "not supported"),
+        (1, 3, "partly supported"),
+        (2, 3, "partly supported"),
+        (1, 1, "supported"),
+    ],
+)
+def test_verdict_counts(hits, total, expected):
+    assert verdict(hits, total) == expected
+
+
+def test_tracking_well_needs_completion_and_the_tolerance():
+    assert tracks_well(outcome("pd", "joint", 0.2), TOL)  # at the tolerance: tracks well
+    assert not tracks_well(outcome("pd", "joint", 0.2000001), TOL)
+    assert not tracks_well(outcome("pd", "joint", DIVERGED), TOL)
+    # a diverged run is poor whatever error it recorded before blowing up
+    blown = outcome("pd", "joint", DIVERGED)
+    blown.metrics["rms_error_m"] = 0.01
+    assert not tracks_well(blown, TOL)
+
+
+@pytest.mark.parametrize(
+    ("pd", "fuzzy", "expected"),
+    [
+        # pd: joint at the tolerance tracks well, tip just above and elbow diverged are
+        # poor (2 of 3 poor); fuzzy tracks well everywhere and beats pd everywhere
+        (
+            (0.2, 0.2000001, DIVERGED),
+            (0.1, 0.2, 0.19),
+            ("partly supported", "supported", "supported"),
+        ),
+        # everything diverges: pd poor everywhere; fuzzy never tracks; inf vs inf is no gain
+        (
+            (DIVERGED, DIVERGED, DIVERGED),
+            (DIVERGED, DIVERGED, DIVERGED),
+            ("supported", "not supported", "not supported"),
+        ),
+        # pd tracks everywhere; fuzzy: equal at the joint (no gain), better at the tip,
+        # diverged at the elbow (tracks at 2 of 3, better at 1 of 3)
+        (
+            (0.05, 0.05, 0.05),
+            (0.05, 0.01, DIVERGED),
+            ("not supported", "partly supported", "partly supported"),
+        ),
+        # fuzzy completes where pd diverges, but above the tolerance: better, not good
+        (
+            (DIVERGED, DIVERGED, DIVERGED),
+            (0.5, 0.5, 0.5),
+            ("supported", "not supported", "supported"),
+        ),
+    ],
+)
+def test_matrix_claims_follow_the_stated_rule(pd, fuzzy, expected):
+    got = claims(matrix(pd, fuzzy), [], TOL)
+    assert len(got) == 3  # no ks study, no fourth claim
+    assert [c["verdict"] for c in got] == list(expected)
+    assert got[0]["claim"].startswith("Nonadaptive control tracks poorly")
+    assert got[1]["claim"].startswith("Fuzzy adaptive control tracks well")
+    assert got[2]["claim"].startswith("Fuzzy adaptation improves")
+
+
+def test_claim_evidence_gives_the_numbers():
+    got = claims(matrix((0.2, 0.2000001, DIVERGED), (0.05, 0.3, DIVERGED)), [], TOL)
+    pd, fz, gain = (c["evidence"] for c in got)
+    assert "joint: RMS 0.2 m" in pd and "end effector: RMS 0.2 m" in pd
+    assert "0.5 m from elbow: diverged at t = 0.01 s" in pd
+    assert "RMS <= 0.2 m" in pd and "RMS <= 0.2 m" in fz
+    assert "rad/s" in pd  # the linearised poles
+    # fuzzy is lower at the joint only (0.3 > 0.2000001; both diverged at the elbow)
+    assert gain.startswith("sensors where the adaptive RMS error is lower: joint (")
+    assert "0.5 m from elbow: inf vs inf m" in gain
+
+
+def test_ks_claim_needs_one_good_setting_per_sensor():
+    base = matrix((0.1, DIVERGED, DIVERGED), (0.1, DIVERGED, DIVERGED))
+
+    def ks_runs(per_sensor):
+        return [
+            outcome("fuzzy", s, rms, ks=ks, law=law)
+            for s, runs in zip(SENSOR_CASES, per_sensor, strict=True)
+            for ks, law, rms in runs
+        ]
+
+    # joint: one good setting; tip: all diverged; elbow: completes, never within 0.2 m
+    study = ks_runs(
+        [
+            [(0.0, "scaled", 0.5), (10.0, "damping", 0.1)],
+            [(0.0, "scaled", DIVERGED), (10.0, "damping", DIVERGED)],
+            [(0.0, "scaled", 0.3), (10.0, "damping", 0.25)],
+        ]
+    )
+    got = claims(base, study, TOL)
+    assert len(got) == 4 and got[3]["claim"].startswith("Some setting of the fuzzy law")
+    assert got[3]["verdict"] == "partly supported"  # 1 of 3 sensors
+    evidence = got[3]["evidence"]
+    assert "joint: RMS 0.1 m at ks = 10 (damping)" in evidence  # the best setting
+    assert "end effector: every setting diverged" in evidence
+    assert "0.5 m from elbow: RMS 0.25 m at ks = 10 (damping)" in evidence
+
+    good = ks_runs([[(1.0, "scaled", 0.2)], [(1.0, "scaled", 0.15)], [(1.0, "scaled", 0.0)]])
+    assert claims(base, good, TOL)[3]["verdict"] == "supported"
+    bad = ks_runs([[(1.0, "scaled", 0.21)], [(1.0, "scaled", DIVERGED)], [(1.0, "scaled", 1.0)]])
+    assert claims(base, bad, TOL)[3]["verdict"] == "not supported"
+
+
+def test_fuzzy_surface_labels_can_be_given_and_are_checked():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from flexarm.fuzzy import paper_system, plot_surface
+
+    _, ax = plt.subplots()
+    plot_surface(paper_system(), ax=ax, n=5, labels=("a (m)", "b (m)", "c (-)"))
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("a (m)", "b (m)")
+    with pytest.raises(TypeError, match="'labels' parameter of plot_surface"):
+        plot_surface(paper_system(), ax=ax, n=5, labels=("x", "y"))
+    plt.close("all")

@@ -9,8 +9,15 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ..control.adaptive import ADAPTATION_LAWS
-from ..studies.reproduction import DEFAULT_KS_RANGE, OUTPUT_FILES, Reproduction, reproduce
+from ..errors import InvalidTypeError, InvalidValueError
+from ..studies.reproduction.cases import (
+    ADAPTATION_LAWS,
+    DEFAULT_DT,
+    DEFAULT_KS,
+    DEFAULT_KS_RANGE,
+    DEFAULT_LAW,
+    DEFAULT_TOLERANCE,
+)
 from ._common import EXIT_FAILURE, UsageError, check_out
 
 __all__ = ["add_parser"]
@@ -32,29 +39,9 @@ def _ks_list(text: str) -> tuple[float, ...]:
     return values
 
 
-def _format(rep: Reproduction, out: Path) -> str:
-    s = rep.settings
-    lines = [
-        f"{_PROG}: {s['runs']} runs in {s['wall_time_s']:.1f} s "
-        f"(control period {s['dt_s']:g} s; 'tracks well' = RMS <= {s['tolerance_m']:g} m)",
-        f"  {'controller':<16}{'sensor':<14}{'status':<22}{'rms (m)':>10}{'max (m)':>10}",
-    ]
-    for c in rep.cases:
-        row = c.row()
-        status = "ok" if c.status == "ok" else f"diverged at {c.diverged_at_s:.3g} s"
-        rms = "" if row["rms_error_m"] is None else f"{row['rms_error_m']:.4g}"
-        mx = "" if row["max_error_m"] is None else f"{row['max_error_m']:.4g}"
-        name = "nonadaptive" if c.case.controller == "pd" else "fuzzy adaptive"
-        lines.append(f"  {name:<16}{c.case.sensor:<14}{status:<22}{rms:>10}{mx:>10}")
-    lines.append("claims:")
-    for claim in rep.claims:
-        lines.append(f"  - {claim['claim']}: {claim['verdict'].upper()}")
-        lines.append(f"      {claim['evidence']}")
-    lines.append(f"  report in {out / 'report.html'}")
-    return "\n".join(lines)
-
-
 def _cmd_reproduce(args: argparse.Namespace) -> int:
+    from ..studies.reproduction import reproduce  # the simulator: loaded only to run
+
     out = Path(os.path.abspath(args.out))
     check_out(out, _PROG)
     try:
@@ -69,20 +56,20 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
             workers=args.workers,
             progress=None if not args.json else False,
         )
-    except (TypeError, ValueError) as exc:
+    except (InvalidTypeError, InvalidValueError) as exc:
         raise UsageError(f"{_PROG}: error: {exc}") from None
     try:
-        rep.write(out)
+        files = rep.write(out)
     except OSError as exc:
         print(f"{_PROG}: error: cannot write {str(out)!r}: {exc}", file=sys.stderr)
         return EXIT_FAILURE
     if args.json:
         summary: dict[str, Any] = rep.summary()
         summary["out"] = str(out)
-        summary["files"] = list(OUTPUT_FILES)
+        summary["files"] = files
         print(json.dumps(summary, indent=2))
     else:
-        print(_format(rep, out))
+        print(f"{_PROG}: {rep.text()}\n  report in {out / 'report.html'}")
     return 0
 
 
@@ -126,12 +113,21 @@ def add_parser(sub: Any) -> None:
         "--duration", type=float, metavar="SECONDS", help="per run (default: the square, 20 s)"
     )
     p.add_argument(
-        "--dt", type=float, default=2e-4, metavar="SECONDS", help="control period (default 2e-4)"
+        "--dt",
+        type=float,
+        default=DEFAULT_DT,
+        metavar="SECONDS",
+        help=f"control period (default {DEFAULT_DT:g})",
     )
     p.add_argument(
-        "--ks", type=float, default=1.0, help="membership-width gain of the fuzzy law (default 1)"
+        "--ks",
+        type=float,
+        default=DEFAULT_KS,
+        help=f"membership-width gain of the fuzzy law (default {DEFAULT_KS:g})",
     )
-    p.add_argument("--law", choices=ADAPTATION_LAWS, default="scaled", help="default scaled")
+    p.add_argument(
+        "--law", choices=ADAPTATION_LAWS, default=DEFAULT_LAW, help=f"default {DEFAULT_LAW}"
+    )
     p.add_argument(
         "--ks-range",
         type=_ks_list,
@@ -150,8 +146,9 @@ def add_parser(sub: Any) -> None:
     p.add_argument(
         "--tolerance",
         type=float,
-        default=0.05,
-        help="'tracks well' = RMS error <= TOLERANCE x the square's side (default 0.05)",
+        default=DEFAULT_TOLERANCE,
+        help="'tracks well' = RMS error <= TOLERANCE x the square's side "
+        f"(default {DEFAULT_TOLERANCE:g})",
     )
     p.add_argument("--workers", type=int, help="parallel runs (default: CPUs, at most 4)")
     p.set_defaults(func=_cmd_reproduce)

@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import check_int, check_option
-from ..errors import InvalidValueError
+from ..errors import InvalidTypeError, InvalidValueError
 from .compiled import evaluate_many
 from .sets import LeftShoulder, RightShoulder, Rule, Triangle, Variable
 from .system import DEFUZZIFIERS, FuzzySystem
@@ -69,7 +69,17 @@ def paper_system(defuzzifier: str = "centroid") -> FuzzySystem:
     return FuzzySystem(tuple(deltas), lam, rules, defuzzifier=defuzzifier)
 
 
-def plot_surface(fls: FuzzySystem, ax: Any = None, n: int = 101) -> tuple[Any, Any]:
+_PAPER_LABELS = {"delta1": "δ1 (m)", "delta2": "δ2 (m)", "lambda": "λ (-)"}
+"""Axis labels of the paper's variables: link deformations in m, λ dimensionless."""
+
+
+def plot_surface(
+    fls: FuzzySystem,
+    ax: Any = None,
+    n: int = 101,
+    *,
+    labels: tuple[str, str, str] | None = None,
+) -> tuple[Any, Any]:
     """Draw the output of a two-input system over its input universes.
 
     Parameters
@@ -81,6 +91,10 @@ def plot_surface(fls: FuzzySystem, ax: Any = None, n: int = 101) -> tuple[Any, A
         new figure with a 3-D axes.
     n : int
         Grid points per input.
+    labels : tuple of str, optional
+        Axis labels of the two inputs and the output, "quantity (unit)". Default:
+        the paper's for its variables (``"δ1 (m)"``, ``"δ2 (m)"``, ``"λ (-)"``,
+        :func:`paper_system`), else the variables' names.
 
     Returns
     -------
@@ -93,6 +107,19 @@ def plot_surface(fls: FuzzySystem, ax: Any = None, n: int = 101) -> tuple[Any, A
             f"Got {fls!r} instead."
         )
     n = check_int(n, "n", "plot_surface", minimum=2)
+    if labels is None:
+        names = (fls.inputs[0].name, fls.inputs[1].name, fls.output.name)
+        label = [_PAPER_LABELS.get(name, name) for name in names]
+        labels = (label[0], label[1], label[2])
+    elif (
+        not isinstance(labels, tuple | list)
+        or len(labels) != 3
+        or not all(isinstance(x, str) for x in labels)
+    ):
+        raise InvalidTypeError(
+            "The 'labels' parameter of plot_surface must be three str (x, y, z). "
+            f"Got {labels!r} instead."
+        )
     import matplotlib.pyplot as plt
 
     g1 = np.linspace(*fls.inputs[0].universe, n)
@@ -109,9 +136,9 @@ def plot_surface(fls: FuzzySystem, ax: Any = None, n: int = 101) -> tuple[Any, A
         ax = fig.add_subplot(projection="3d")
     if getattr(ax, "name", "") == "3d":
         artist = ax.plot_surface(x1, x2, z, cmap="viridis")
-        ax.set_zlabel(fls.output.name)
+        ax.set_zlabel(labels[2])
     else:
         artist = ax.contourf(x1, x2, z, levels=20, cmap="viridis")
-    ax.set_xlabel(fls.inputs[0].name)
-    ax.set_ylabel(fls.inputs[1].name)
+    ax.set_xlabel(labels[0])
+    ax.set_ylabel(labels[1])
     return ax, artist

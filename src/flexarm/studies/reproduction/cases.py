@@ -1,0 +1,192 @@
+"""The study's vocabulary: one run (:class:`Case`), its outcome (:class:`CaseResult`), defaults.
+
+Light on purpose (NumPy only): the command line takes its choices and
+defaults from here without loading the simulator.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from ...sim.results import SimulationResult
+
+__all__ = [
+    "ADAPTATION_LAWS",
+    "CONTROLLER_KINDS",
+    "CONTROLLER_LABELS",
+    "DEFAULT_DT",
+    "DEFAULT_KS",
+    "DEFAULT_KS_RANGE",
+    "DEFAULT_LAW",
+    "DEFAULT_TOLERANCE",
+    "DELAY_CASES",
+    "SENSOR_CASES",
+    "SENSOR_LABELS",
+    "Case",
+    "CaseResult",
+]
+
+CONTROLLER_KINDS = ("pd", "fuzzy")
+"""Nonadaptive (the paper's JT-PD gains) and fuzzy adaptive."""
+SENSOR_CASES = ("joint", "tip", "point:1:0.5")
+"""Joint encoders, the end effector, and 0.5 m from the elbow along link 2."""
+DELAY_CASES = ("none", "seed", "dispersive")
+"""No delay, the seed's wave speed, the dispersive bending-wave speed."""
+ADAPTATION_LAWS = ("scaled", "damping")
+"""The fuzzy law's adaptation laws: :data:`flexarm.control.adaptive.ADAPTATION_LAWS`,
+repeated here so that reading them does not compile the controllers (a test
+keeps the two equal)."""
+DEFAULT_KS_RANGE = (0.0, 1.0, 10.0, 100.0, 1000.0)
+"""The ``ks`` values of the sensitivity study (dimensionless)."""
+DEFAULT_DT = 2e-4
+"""Control period, s: the hubless paper arm under the paper's gains is
+sampled-data unstable at 1 ms."""
+DEFAULT_KS = 1.0
+"""Membership-width gain of the fuzzy law in the paper's matrix (the paper's
++-5 m universe)."""
+DEFAULT_LAW = "scaled"
+"""Adaptation law of the paper's matrix (the paper's printed form)."""
+DEFAULT_TOLERANCE = 0.05
+"""A run tracks well when its RMS error is at most this fraction of the square's side."""
+
+CONTROLLER_LABELS = {"pd": "nonadaptive PD", "fuzzy": "fuzzy adaptive"}
+SENSOR_LABELS = {"joint": "joint", "tip": "end effector", "point:1:0.5": "0.5 m from elbow"}
+
+
+@dataclass(frozen=True)
+class Case:
+    """One run of the study.
+
+    Parameters
+    ----------
+    controller : {"pd", "fuzzy"}
+    sensor : {"joint", "tip", "point:1:0.5"}
+    delay : {"none", "seed", "dispersive"}
+    ks : float
+        Membership-width gain of the fuzzy law, dimensionless (ignored by "pd").
+    law : {"scaled", "damping"}
+        Adaptation law of the fuzzy controller (ignored by "pd").
+    """
+
+    controller: str
+    sensor: str
+    delay: str = "none"
+    ks: float = DEFAULT_KS
+    law: str = DEFAULT_LAW
+
+    def key(self) -> tuple[str | float, ...]:
+        """Identity of the run (the fuzzy settings do not matter for "pd")."""
+        if self.controller == "pd":
+            return ("pd", self.sensor, self.delay)
+        return (self.controller, self.sensor, self.delay, self.ks, self.law)
+
+    def scenario_dict(self, duration: float | None, dt: float) -> dict[str, Any]:
+        """The case in the scenario-file schema (:mod:`flexarm.sim.scenario`).
+
+        Parameters
+        ----------
+        duration : float or None
+            Simulated time, s (None: the whole square).
+        dt : float
+            Control period, s.
+        """
+        if self.sensor.startswith("point:"):
+            _, link, distance = self.sensor.split(":")
+            sensor: dict[str, Any] = {
+                "kind": "point",
+                "link": int(link),
+                "distance": float(distance),
+            }
+        else:
+            sensor = {"kind": self.sensor}
+        controller: dict[str, Any] = {"kind": self.controller}
+        if self.controller == "fuzzy":
+            controller.update(ks=self.ks, law=self.law)
+        simulation: dict[str, Any] = {"dt": dt}
+        if duration is not None:
+            simulation["duration"] = duration
+        data: dict[str, Any] = {
+            "sensor": sensor,
+            "controller": controller,
+            "simulation": simulation,
+        }
+        if self.delay != "none":
+            data["delay"] = {"delay": self.delay}
+        return data
+
+    @property
+    def label(self) -> str:
+        """A readable name: controller, sensor, and the settings that differ from the matrix."""
+        text = f"{CONTROLLER_LABELS[self.controller]}, {SENSOR_LABELS[self.sensor]} sensor"
+        if self.controller == "fuzzy":
+            text += f" (ks = {self.ks:g}, {self.law})"
+        if self.delay != "none":
+            text += f", {self.delay} delay"
+        return text
+
+
+@dataclass
+class CaseResult:
+    """The outcome of one :class:`Case`.
+
+    Attributes
+    ----------
+    case : Case
+    status : {"ok", "diverged"}
+    diverged_at_s : float or None
+        When the state diverged, s.
+    metrics : dict
+        :meth:`SimulationResult.metrics` of the completed run; for a diverged
+        run only ``sim_time_s`` and ``wall_time_s`` (errors of a run that blew
+        up are not tracking errors).
+    delay_s : float
+        The sensor delay the case ran with, s.
+    max_real_pole : float
+        Largest real part of the closed-loop poles linearised at the start of
+        the path, in continuous time without delay
+        (:func:`flexarm.control.linearize.closed_loop_poles`), rad/s: > 0 means the
+        loop cannot hold the path's start whatever the control period.
+    result : SimulationResult
+        The (partial, if diverged) time series, for the figures.
+    """
+
+    case: Case
+    status: str
+    diverged_at_s: float | None
+    metrics: dict[str, Any]
+    delay_s: float
+    max_real_pole: float
+    result: SimulationResult = field(repr=False)
+
+    @property
+    def rms(self) -> float:
+        """RMS tracking error, m (inf if diverged)."""
+        return float(self.metrics["rms_error_m"]) if self.status == "ok" else float("inf")
+
+    def row(self) -> dict[str, Any]:
+        """One flat, JSON-ready table row (units in the keys)."""
+        m = self.metrics
+        corners = [x for x in m.get("corner_errors_m", []) if x is not None and np.isfinite(x)]
+        return {
+            "controller": self.case.controller,
+            "law": self.case.law if self.case.controller == "fuzzy" else None,
+            "ks": self.case.ks if self.case.controller == "fuzzy" else None,
+            "sensor": self.case.sensor,
+            "delay": self.case.delay,
+            "delay_s": self.delay_s,
+            "status": self.status,
+            "diverged_at_s": self.diverged_at_s,
+            "max_real_pole_rad_s": self.max_real_pole,
+            "rms_error_m": m.get("rms_error_m"),
+            "max_error_m": m.get("max_error_m"),
+            "corner_error_max_m": max(corners) if corners else None,
+            "residual_vibration_m": m.get("residual_vibration_m"),
+            "control_effort_N2m2s": m.get("control_effort_N2m2s"),
+            "max_torque_Nm": m.get("max_torque_Nm"),
+            "sim_time_s": m.get("sim_time_s"),
+            "wall_time_s": m.get("wall_time_s"),
+        }

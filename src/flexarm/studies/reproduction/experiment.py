@@ -1,0 +1,193 @@
+"""The run matrix of the reproduction, and running it.
+
+:class:`RunMatrix` lists the runs: the paper's matrix {nonadaptive PD, fuzzy
+adaptive} x {joint sensor, end-effector sensor, sensor 0.5 m from the elbow}
+(no delay, the default fuzzy settings), and the sensitivity study (the matrix
+under each delay model; the fuzzy law over ``ks`` and the adaptation laws).
+Runs that two lists share (and nonadaptive runs that differ only in the fuzzy
+settings, which they ignore) are run once.
+
+Every run is one :func:`flexarm.sim.simulate.simulate` call built from a
+:class:`flexarm.sim.scenario.Scenario`, so each case can be rerun with
+``flexarm simulate --scenario``. A run that diverges is a result: its status,
+the time and the partial series are kept (:func:`run_case`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...control.linearize import closed_loop_poles
+from ...sim.scenario import Scenario
+from ...sim.simulate import SimulationError, simulate
+from .cases import CONTROLLER_KINDS, SENSOR_CASES, Case, CaseResult
+
+__all__ = ["Progress", "RunMatrix", "progress_printer", "run_case", "square_side"]
+
+Progress = Callable[[int, int, Case], None]
+"""Called after each finished run with ``(done, total, case)``."""
+
+_SOURCE = "reproduce"
+
+
+@dataclass(frozen=True)
+class RunMatrix:
+    """The runs of the study, in report order.
+
+    Attributes
+    ----------
+    matrix : tuple of Case
+        The paper's matrix, controller-major (no delay, the default fuzzy settings).
+    delay_study : tuple of Case
+        The matrix under each delay model (delay-major).
+    ks_study : tuple of Case
+        The fuzzy law over ``ks`` and the adaptation laws, no delay (law-major, then ``ks``).
+    """
+
+    matrix: tuple[Case, ...]
+    delay_study: tuple[Case, ...] = ()
+    ks_study: tuple[Case, ...] = ()
+
+    @classmethod
+    def build(
+        cls,
+        *,
+        ks: float,
+        law: str,
+        ks_range: Sequence[float] = (),
+        laws: Sequence[str] = (),
+        delays: Sequence[str] = (),
+    ) -> RunMatrix:
+        """The matrix with the fuzzy law ``(ks, law)``, and the sensitivity study.
+
+        Parameters
+        ----------
+        ks : float
+            Membership-width gain of the matrix's fuzzy runs, dimensionless.
+        law : {"scaled", "damping"}
+            Adaptation law of the matrix's fuzzy runs.
+        ks_range, laws : sequences
+            The ``ks`` study: every law at every ``ks`` (empty: none).
+        delays : sequence of {"none", "seed", "dispersive"}
+            The delay study: the matrix under each delay model (empty: none).
+        """
+        matrix = tuple(Case(c, s, "none", ks, law) for c in CONTROLLER_KINDS for s in SENSOR_CASES)
+        delay_study = tuple(
+            Case(c, s, d, ks, law) for d in delays for c in CONTROLLER_KINDS for s in SENSOR_CASES
+        )
+        ks_study = tuple(
+            Case("fuzzy", s, "none", k, lw) for lw in laws for k in ks_range for s in SENSOR_CASES
+        )
+        return cls(matrix, delay_study, ks_study)
+
+    def unique(self) -> dict[tuple[str | float, ...], Case]:
+        """The distinct runs by :meth:`Case.key`, first occurrence first."""
+        unique: dict[tuple[str | float, ...], Case] = {}
+        for c in (*self.matrix, *self.delay_study, *self.ks_study):
+            unique.setdefault(c.key(), c)
+        return unique
+
+    def validate(self, duration: float | None, dt: float) -> None:
+        """Build every run's scenario, so that bad settings fail before the first run."""
+        for c in self.unique().values():
+            Scenario.from_dict(c.scenario_dict(duration, dt), source=_SOURCE)
+
+    def run(
+        self,
+        duration: float | None,
+        dt: float,
+        *,
+        workers: int = 1,
+        progress: Progress | None = None,
+    ) -> tuple[list[CaseResult], list[CaseResult], list[CaseResult]]:
+        """Run every distinct case once (in parallel threads; the compiled loop releases the GIL).
+
+        Parameters
+        ----------
+        duration : float or None
+            Simulated time per run, s (None: the whole square).
+        dt : float
+            Control period, s.
+        workers : int
+            Runs in parallel.
+        progress : callable, optional
+            Called with ``(done, total, case)`` after each run.
+
+        Returns
+        -------
+        matrix, delay_study, ks_study : list of CaseResult
+            In the order of the attributes; a run shared by several cases is
+            the same result, relabelled with each case.
+        """
+        unique = self.unique()
+        results: dict[tuple[str | float, ...], CaseResult] = {}
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            futures = {
+                pool.submit(run_case, case, duration, dt): key for key, case in unique.items()
+            }
+            for done, fut in enumerate(as_completed(futures), start=1):
+                key = futures[fut]
+                results[key] = fut.result()
+                if progress is not None:
+                    progress(done, len(unique), unique[key])
+
+        def pick(cases: tuple[Case, ...]) -> list[CaseResult]:
+            out = []
+            for c in cases:
+                r = results[c.key()]
+                if r.case != c:  # the same run under another name (pd ignores ks and law)
+                    r = dataclasses.replace(r, case=c)
+                out.append(r)
+            return out
+
+        return pick(self.matrix), pick(self.delay_study), pick(self.ks_study)
+
+
+def run_case(case: Case, duration: float | None, dt: float) -> CaseResult:
+    """Run one case; a divergence is a result (status ``"diverged"``, partial series).
+
+    Parameters
+    ----------
+    case : Case
+    duration : float or None
+        Simulated time, s (None: the whole square).
+    dt : float
+        Control period, s.
+    """
+    scenario = Scenario.from_dict(case.scenario_dict(duration, dt), source=_SOURCE)
+    delay_s = scenario.delay.delay
+    start = np.asarray(scenario.trajectory.evaluate(np.zeros(1))[0][0], dtype=float)
+    poles = closed_loop_poles(scenario.arm, scenario.controller, start, scenario.sensor)
+    pole = float(poles[0].real)
+    try:
+        result = simulate(scenario.arm, **scenario.simulate_kwargs(), progress=False)
+    except SimulationError as exc:
+        partial = exc.result
+        metrics = {"sim_time_s": float(exc.time), "wall_time_s": partial.info.get("wall_time_s")}
+        return CaseResult(case, "diverged", float(exc.time), metrics, delay_s, pole, partial)
+    return CaseResult(case, "ok", None, result.metrics(), delay_s, pole, result)
+
+
+def square_side() -> float:
+    """Side of the default square the study tracks, m."""
+    return float(Scenario.from_dict({}, source=_SOURCE).trajectory.side)
+
+
+def progress_printer(progress: Progress | bool | None) -> Progress | None:
+    """A callable as it is; ``True``: one line per run on stderr; None: that if stderr is a tty."""
+    if callable(progress):
+        return progress
+    show = sys.stderr.isatty() if progress is None else bool(progress)
+    if not show:
+        return None
+
+    def report(done: int, total: int, case: Case) -> None:
+        print(f"[{done}/{total}] {case.label}", file=sys.stderr, flush=True)
+
+    return report
