@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import re
+import subprocess
+import sys
 
 import matplotlib
 import numpy as np
@@ -95,6 +98,13 @@ def test_summary_plot_and_save(result, tmp_path):
     assert summary["info"]["n_holds"] == 2000 and summary["info"]["hold_s"] == pytest.approx(0.01)
     fig = result.plot()
     assert len(fig.axes) >= 4
+    for ax in fig.axes[:4]:  # the four panels: "quantity (unit)" on both axes
+        assert re.match(r"^\S.* \([^()]+\)$", ax.get_xlabel()), ax.get_xlabel()
+        assert re.match(r"^\S.* \([^()]+\)$", ax.get_ylabel()), ax.get_ylabel()
+    from matplotlib.figure import Figure
+
+    given = Figure()
+    assert result.plot(given) is given and len(given.axes) >= 4
     paths = result.save(tmp_path / "out")
     assert [p.name for p in paths] == ["summary.json", "curves.npz", "identify_joint.png"]
     with np.load(paths[1]) as z:
@@ -149,3 +159,15 @@ def test_example_script(tmp_path, capsys):
     import matplotlib.pyplot as plt
 
     plt.close("all")
+
+
+def test_settings_load_no_simulator():
+    code = (
+        "import sys\n"
+        "from flexarm.studies.joint_identification import JointExcitation, JointSensors\n"
+        "JointExcitation(duration=1.0), JointSensors()\n"
+        "heavy = [m for m in sys.modules if m.split('.')[0] in ('numba', 'matplotlib')]\n"
+        "assert not heavy, heavy\n"
+    )
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert res.returncode == 0, res.stderr

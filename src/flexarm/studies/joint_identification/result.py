@@ -1,0 +1,232 @@
+"""What the joint study found: estimated curves beside the truth, the Hammerstein model, plots.
+
+Matplotlib is imported only when a figure is drawn.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..._io import atomic_path
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from ...ident.hammerstein import HammersteinIdentifier
+
+__all__ = ["SAVED_FILES", "CurveEstimate", "JointIdentification"]
+
+F64 = NDArray[np.float64]
+SAVED_FILES = ("summary.json", "curves.npz", "identify_joint.png")
+"""What :meth:`JointIdentification.save` writes."""
+_FIGURE_SIZE = (11.0, 7.5)  # inches
+
+
+@dataclass(frozen=True)
+class CurveEstimate:
+    """An estimated static curve beside the true one, on a common grid.
+
+    Attributes
+    ----------
+    name : str
+    x : ndarray, shape (g,)
+        Grid (units ``x_unit``).
+    estimate, truth : ndarray, shape (g,)
+        Estimated and true values (units ``y_unit``); NaN where no sample reached.
+    x_unit, y_unit : str
+    """
+
+    name: str
+    x: F64
+    estimate: F64
+    truth: F64
+    x_unit: str
+    y_unit: str
+
+    @property
+    def rms_error(self) -> float:
+        """Root-mean-square error over the grid, units of ``y``."""
+        ok = np.isfinite(self.estimate)
+        return float(np.sqrt(np.mean((self.estimate[ok] - self.truth[ok]) ** 2)))
+
+    @property
+    def max_error(self) -> float:
+        """Largest absolute error over the grid, units of ``y``."""
+        ok = np.isfinite(self.estimate)
+        return float(np.max(np.abs(self.estimate[ok] - self.truth[ok])))
+
+    @property
+    def relative_rms_error(self) -> float:
+        """:attr:`rms_error` over the range of the true curve on the grid (NaN if flat)."""
+        spread = float(np.ptp(self.truth))
+        return self.rms_error / spread if spread > 0.0 else math.nan
+
+    def summary(self) -> dict[str, Any]:
+        """Error figures as a JSON-able dict."""
+        return {
+            "grid": [float(self.x[0]), float(self.x[-1])],
+            "x_unit": self.x_unit,
+            "y_unit": self.y_unit,
+            "rms_error": self.rms_error,
+            "max_error": self.max_error,
+            "relative_rms_error": (
+                None if math.isnan(self.relative_rms_error) else self.relative_rms_error
+            ),
+        }
+
+
+@dataclass(frozen=True)
+class JointIdentification:
+    """What :func:`~flexarm.studies.joint_identification.identify_joint` found, beside the truth.
+
+    Attributes
+    ----------
+    stiffness : CurveEstimate
+        ``tau_s(Delta)``: rad to N m.
+    friction : CurveEstimate
+        ``f(v)``: rad/s to N m.
+    drive : CurveEstimate
+        The Hammerstein model's static part against the true drive map, N m to N m.
+    windup : dict
+        Secant stiffness (N m/rad) of the estimate and the truth inside the
+        soft-windup region (``|Delta| <= 0.2 / sqrt(asw)``) and outside it
+        (between ``2`` and ``4 / sqrt(asw)``, both signs); empty for a linear joint.
+    hammerstein : HammersteinIdentifier
+        The fitted model (commanded torque, N m, to link acceleration, rad/s**2).
+    validation : dict of str to ndarray
+        ``"u"`` (N m), ``"y"`` and ``"y_hat"`` (rad/s**2) on the held-out part,
+        and ``"t"`` (s); each of shape (n_holds - n_fit,).
+    fit_percent : float
+        Free-run fit of the Hammerstein model on the held-out part, %.
+    reference_fit_percent : float
+        Fit of a least-squares FIR model driven by the true ``phi(u)``, %.
+    info : dict
+        Settings (JSON-able).
+    """
+
+    stiffness: CurveEstimate
+    friction: CurveEstimate
+    drive: CurveEstimate
+    windup: dict[str, float]
+    hammerstein: HammersteinIdentifier
+    validation: dict[str, F64]
+    fit_percent: float
+    reference_fit_percent: float
+    info: dict[str, Any]
+
+    def summary(self) -> dict[str, Any]:
+        """Error figures and settings as a JSON-able dict."""
+        return {
+            "stiffness": self.stiffness.summary(),
+            "friction": self.friction.summary(),
+            "drive": self.drive.summary(),
+            "windup": dict(self.windup),
+            "hammerstein": {
+                "fit_percent": self.fit_percent,
+                "reference_fit_percent": self.reference_fit_percent,
+                "arma_order": self.hammerstein.order_,
+                "a": list(self.hammerstein.arma_.a),
+                "b": list(self.hammerstein.arma_.b),
+                "impulse_response": self.hammerstein.impulse_response_.tolist(),
+            },
+            "info": dict(self.info),
+        }
+
+    def save(self, directory: str | os.PathLike[str]) -> list[Path]:
+        """Write ``summary.json``, ``curves.npz`` and ``identify_joint.png`` into ``directory``.
+
+        Each file is written atomically; the directory is created if needed.
+        The figure is drawn off screen (no pyplot, no change of backend).
+
+        Returns
+        -------
+        list of Path
+            The files written (:data:`SAVED_FILES`).
+        """
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        out = Path(directory)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / name for name in SAVED_FILES]
+        with atomic_path(paths[0]) as tmp:
+            tmp.write_text(json.dumps(self.summary(), indent=2) + "\n")
+        arrays: dict[str, F64] = {}
+        for curve in (self.stiffness, self.friction, self.drive):
+            arrays[f"{curve.name}_x"] = curve.x
+            arrays[f"{curve.name}_estimate"] = curve.estimate
+            arrays[f"{curve.name}_truth"] = curve.truth
+        arrays["impulse_response"] = self.hammerstein.impulse_response_
+        with atomic_path(paths[1]) as tmp, open(tmp, "wb") as f:
+            np.savez(f, **arrays)  # type: ignore[arg-type]
+        fig = Figure(figsize=_FIGURE_SIZE, layout="constrained")
+        FigureCanvasAgg(fig)
+        self.plot(fig)
+        with atomic_path(paths[2]) as tmp:
+            fig.savefig(tmp, format="png", dpi=110)
+        return paths
+
+    def plot(self, fig: Figure | None = None) -> Figure:
+        """Four panels: stiffness (with the windup region enlarged), friction, drive, validation.
+
+        Parameters
+        ----------
+        fig : matplotlib Figure, optional
+            Where to draw (an empty figure); default a new pyplot figure.
+
+        Returns
+        -------
+        Figure
+            Never blocks.
+        """
+        if fig is None:
+            import matplotlib.pyplot as plt
+
+            fig = plt.figure(figsize=_FIGURE_SIZE, layout="constrained")
+        axes = fig.subplots(2, 2)
+        s = self.stiffness
+        ax = axes[0, 0]
+        ax.plot(1e3 * s.x, s.truth, "k--", lw=1, label="true")
+        ax.plot(1e3 * s.x, s.estimate, lw=1.2, label="estimate")
+        ax.set(
+            xlabel="deflection Δ (mrad)",
+            ylabel="stiffness torque τ_s (N m)",
+            title="joint stiffness torque",
+        )
+        ax.legend(loc="upper left", fontsize="small")
+        w = self.info.get("windup_width_rad")
+        if w:
+            inset = ax.inset_axes((0.58, 0.08, 0.38, 0.38))
+            sel = np.abs(s.x) <= 3 * w
+            inset.plot(1e3 * s.x[sel], s.truth[sel], "k--", lw=1)
+            inset.plot(1e3 * s.x[sel], s.estimate[sel], lw=1.2)
+            inset.set_title("soft windup", fontsize="small")
+            inset.tick_params(labelsize="x-small")
+        f = self.friction
+        ax = axes[0, 1]
+        ax.plot(f.x, f.truth, "k--", lw=1, label="true")
+        ax.plot(f.x, f.estimate, lw=1.2, label="estimate")
+        ax.set(xlabel="link rate v (rad/s)", ylabel="friction f(v) (N m)", title="joint friction")
+        ax.legend(loc="best", fontsize="small")
+        d = self.drive
+        ax = axes[1, 0]
+        ax.plot(d.x, d.truth, "k--", lw=1, label="true drive map")
+        ax.plot(d.x, d.estimate, lw=1.2, label="Hammerstein φ̂")
+        ax.set(xlabel="command u (N m)", ylabel="applied torque (N m)", title="drive nonlinearity")
+        ax.legend(loc="best", fontsize="small")
+        v = self.validation
+        ax = axes[1, 1]
+        m = min(200, v["t"].shape[0])
+        ax.plot(v["t"][:m], v["y"][:m], "k", lw=0.8, label="measured")
+        ax.plot(v["t"][:m], v["y_hat"][:m], lw=1.0, label=f"model ({self.fit_percent:.1f} %)")
+        ax.set(xlabel="t (s)", ylabel="link acceleration (rad/s²)", title="held-out data")
+        ax.legend(loc="best", fontsize="small")
+        return fig
