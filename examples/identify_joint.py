@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from flexarm.errors import InvalidTypeError, InvalidValueError
 from flexarm.studies.joint_identification import JointExcitation, identify_joint
 
 
@@ -42,7 +43,7 @@ def main(argv: list[str] | None = None) -> int:
             torque_measurement="sensor" if args.torque_sensor else "motor-balance",
             rng=args.seed,
         )
-    except (TypeError, ValueError) as exc:
+    except (InvalidTypeError, InvalidValueError) as exc:  # bad settings; a bug keeps its traceback
         print(f"identify_joint: {exc}", file=sys.stderr)
         return 2
     info = res.info
