@@ -12,7 +12,7 @@ completes without diverging and its RMS end-effector error is at most
 The paper gives no figure; the tolerance is a parameter and the report prints
 every error beside the verdict, so a reader can apply their own.
 
-Every run is one :func:`flexarm.sim.simulate.simulate` call built from a
+Every run is one :func:`flexarm.simulate` call built from a
 :class:`flexarm.sim.scenario.Scenario`, so each case can be rerun with
 ``flexarm simulate --scenario`` (the report lists the settings). A run that
 diverges is reported as such, with the time, and its partial result is kept
@@ -43,9 +43,9 @@ from .._validation import check_int, check_option, check_real
 from ..control.adaptive import ADAPTATION_LAWS
 from ..control.linearize import closed_loop_poles
 from ..errors import InvalidValueError
-from ..sim.results import SimulationResult
+from ..sim.closed_loop import simulate
+from ..sim.results import SimulationError, SimulationResult
 from ..sim.scenario import Scenario
-from ..sim.simulate import SimulationError, simulate
 
 __all__ = [
     "CONTROLLER_KINDS",
