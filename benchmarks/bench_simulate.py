@@ -98,7 +98,7 @@ from _machine import machine_info, print_machine
 from flexarm import FlexibleArm, Link
 from flexarm.control.controllers import CompiledController, JacobianTransposePD
 from flexarm.control.trajectories import Square
-from flexarm.sim.simulate import SimulationError, simulate
+from flexarm.sim import SimulationError, simulate
 
 LENGTH, EI, RHO = 4.5, 1676.0, 0.335  # the paper's links (Sasiadek et al. 2014)
 HUB_INERTIA = 3.0  # kg m**2 at both joints in case B (not in the paper)
@@ -188,7 +188,7 @@ _COMPILE_SCRIPT = f"""
 import time
 t0 = time.perf_counter()
 from flexarm import FlexibleArm, Link
-from flexarm.sim.simulate import simulate
+from flexarm.sim import simulate
 arm = FlexibleArm([Link({LENGTH}, {EI}, {RHO}, n_modes=1, hub_inertia={HUB_INERTIA})] * 2)
 t1 = time.perf_counter()
 simulate(arm, dt={DT_B}, duration=0.01, progress=False)
@@ -217,7 +217,7 @@ def scipy_closed_loop(arm: FlexibleArm, dt: float, horizon: float) -> dict[str, 
     """The paper's closed loop written straightforwardly with NumPy and ``solve_ivp``:
     JT-PD on the joint angles' rigid kinematics, zero-order hold, RK45 (default
     tolerances) over each control period, the NumPy dynamics in the right-hand side.
-    Starts, like :func:`flexarm.sim.simulate.simulate`, at rest and undeflected on the
+    Starts, like :func:`flexarm.simulate`, at rest and undeflected on the
     square's first point (positive elbow)."""
     ctrl = JacobianTransposePD.from_arm(arm)
     kp = float(ctrl.kp) * np.eye(2)

@@ -17,9 +17,10 @@ import flexarm as fa
 from flexarm.cli import main
 from flexarm.model.joints import MakkarFriction
 from flexarm.sensing.delays import SEED_WAVE_SPEED, bending_group_speed, travel_delay
+from flexarm.sim import simulate
 from flexarm.sim.results import SimulationResult
-from flexarm.sim.scenario import Scenario, ScenarioError, apply_overrides, load_scenario
-from flexarm.sim.simulate import simulate
+from flexarm.sim.scenario import Scenario, load_scenario
+from flexarm.sim.scenario_schema import ScenarioError, apply_overrides
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "paper_square.toml"

@@ -16,7 +16,7 @@ import pytest
 import flexarm as fa
 from flexarm.model import dynamics
 from flexarm.model.joints import MakkarFriction, NonlinearJoint
-from flexarm.sim import loop
+from flexarm.sim import integrator
 
 TWO_BY_ONE = {
     "paper": lambda: fa.FlexibleArm.paper(),
@@ -141,7 +141,8 @@ def test_rk4_steps_of_both_paths_agree(name):
     q1, dq1, q2, dq2 = q.copy(), dq.copy(), q.copy(), dq.copy()
     h = 1e-3
     for _ in range(20):
-        loop._rk4(q1, dq1, tau, h, arm.arrays, dynamics.make_workspace(n), np.zeros((6, n)))
-        loop._rk4_two_links_one_mode(q2, dq2, tau, h, arm.arrays)
+        ws, scratch = dynamics.make_workspace(n), np.zeros((6, n))
+        integrator.rk4_step(q1, dq1, tau, tau, tau, h, arm.arrays, ws, scratch)
+        integrator.rk4_step_two_links_one_mode(q2, dq2, tau, tau, tau, h, arm.arrays)
     np.testing.assert_allclose(q2, q1, rtol=1e-12, atol=1e-12 * np.abs(q1).max())
     np.testing.assert_allclose(dq2, dq1, rtol=1e-10, atol=1e-10 * np.abs(dq1).max())

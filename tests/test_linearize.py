@@ -11,7 +11,7 @@ from flexarm.control.controllers import JacobianTransposePD, JointPD
 from flexarm.control.linearize import closed_loop_matrix, closed_loop_poles
 from flexarm.control.trajectories import Line
 from flexarm.sensing.sensors import JointSensor, PointSensor, TipSensor
-from flexarm.sim.simulate import SimulationError, simulate
+from flexarm.sim import SimulationError, simulate
 
 L1, L2, RHO, HUB = 1.2, 0.9, 2.0, 0.05
 

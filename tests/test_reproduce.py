@@ -225,7 +225,7 @@ cli.add_parser(parser.add_subparsers())
 assert parser.parse_args(["reproduce", "--law", "damping"]).law == "damping"
 assert rep.OUTPUT_FILES and rep.SENSOR_CASES
 heavy = [m for m in sys.modules if m.split(".")[0] in ("numba", "matplotlib")
-         or m in ("flexarm.sim.simulate", "flexarm.studies.reproduction.experiment")]
+         or m in ("flexarm.sim.closed_loop", "flexarm.studies.reproduction.experiment")]
 assert not heavy, heavy
 """
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)

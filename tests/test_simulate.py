@@ -12,9 +12,8 @@ from flexarm.control.controllers import CompiledController, JacobianTransposePD,
 from flexarm.control.trajectories import Circle, Line, Square
 from flexarm.sensing.delays import DelayModel
 from flexarm.sensing.sensors import JointSensor, PointSensor, TipSensor, parse_sensor
-from flexarm.sim import loop
+from flexarm.sim import SimulationError, loop, simulate
 from flexarm.sim.results import SimulationResult
-from flexarm.sim.simulate import SimulationError, simulate
 
 
 @pytest.fixture(scope="module")

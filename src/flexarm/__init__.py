@@ -42,9 +42,10 @@ _NAMES = {
     "Link": "model.link",
     "MakkarFriction": "model.joints",
     "NonlinearJoint": "model.joints",
-    "SimulationError": "sim.simulate",
+    "SimulationError": "sim.results",
     "SimulationResult": "sim.results",
-    "simulate": "sim.simulate",
+    "simulate": "sim.closed_loop",
+    "simulate_open_loop": "sim.open_loop",
 }
 
 __getattr__, __dir__, __all__ = attach(__name__, _SUBPACKAGES, _NAMES)
@@ -63,6 +64,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run
     )
     from .model.link import Link as Link
     from .model.modes import BeamModes as BeamModes
+    from .sim.closed_loop import simulate as simulate
+    from .sim.open_loop import simulate_open_loop as simulate_open_loop
+    from .sim.results import SimulationError as SimulationError
     from .sim.results import SimulationResult as SimulationResult
-    from .sim.simulate import SimulationError as SimulationError
-    from .sim.simulate import simulate as simulate

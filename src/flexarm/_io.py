@@ -14,7 +14,10 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["atomic_path", "json_ready", "output_directory"]
+__all__ = ["JSONValue", "atomic_path", "json_ready", "output_directory"]
+
+JSONValue = None | bool | int | float | str | list["JSONValue"] | dict[str, "JSONValue"]
+"""A value JSON can hold (before :func:`json_ready` maps NaN and arrays)."""
 
 
 @contextmanager

@@ -26,6 +26,7 @@ __all__ = [
     "check_int",
     "check_option",
     "check_real",
+    "check_rng",
     "check_sequence_of",
     "validate_real_fields",
 ]
@@ -182,3 +183,16 @@ def check_array(
             _fail(name, owner, "finite (no NaN or inf)", _Described("non-finite entries"))
         )
     return arr
+
+
+def check_rng(rng: object, owner: str) -> np.random.Generator:
+    """``rng`` as a :class:`numpy.random.Generator`: a Generator as it is, ``None`` or
+    an int seed through :func:`numpy.random.default_rng`; InvalidTypeError otherwise."""
+    if rng is None or (isinstance(rng, int | np.integer) and not isinstance(rng, bool)):
+        return np.random.default_rng(None if rng is None else int(rng))
+    if isinstance(rng, np.random.Generator):
+        return rng
+    raise InvalidTypeError(
+        f"The 'rng' parameter of {owner} must be a numpy Generator, an int seed or None. "
+        f"Got {type(rng).__name__} instead."
+    )

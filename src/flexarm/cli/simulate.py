@@ -7,29 +7,27 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
+from ..errors import InvalidTypeError, InvalidValueError
 from ..sensing.delays import DELAY_METHODS
 from ..sensing.sensors import PointSensor, Sensor, parse_sensor
-from ..sim.results import SimulationResult
-from ..sim.scenario import (
+from ..sim.results import RESULT_FILES, SimulationError
+from ..sim.scenario_schema import (
     CONTROLLERS,
     DELAY_MODELS,
     SHAPER_MODES,
     SHAPERS,
-    Scenario,
     ScenarioError,
     apply_overrides,
     read_scenario,
 )
-from ..sim.simulate import SimulationError, simulate
-from ._common import EXIT_FAILURE, UsageError, check_out, json_ready, output_directory
+from ._common import EXIT_FAILURE, UsageError, check_out, json_ready
 
-__all__ = ["OUTPUT_FILES", "add_parser"]
+if TYPE_CHECKING:
+    from ..sim.scenario import Scenario
 
-OUTPUT_FILES = ("result.npz", "summary.json", "timeseries.csv", "tracking.png")
+__all__ = ["add_parser"]
 
 # which command-line option set which scenario key (for error messages)
 _OPTION_OF_KEY = {
@@ -99,6 +97,8 @@ def _overrides(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
 
 def _build_scenario(args: argparse.Namespace) -> Scenario:
     """The scenario file (if any) with the command-line options over it."""
+    from ..sim.scenario import Scenario
+
     overrides = _overrides(args)
     given = {f"{s}.{k}" for s, table in overrides.items() for k in table}
     try:
@@ -110,29 +110,6 @@ def _build_scenario(args: argparse.Namespace) -> Scenario:
             option = _OPTION_OF_KEY[exc.key]
             raise UsageError(f"flexarm simulate: error: argument {option}: {exc.reason}") from None
         raise UsageError(f"flexarm simulate: error: {exc}") from None
-
-
-def _write_outputs(out: Path, result: SimulationResult, summary: dict[str, Any]) -> None:
-    """Write every file into a fresh directory beside ``out``, then rename it into place."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    with output_directory(out) as tmp:
-        result.save(tmp / "result.npz")
-        (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-        header, table = result.table()
-        np.savetxt(
-            tmp / "timeseries.csv",
-            table,
-            fmt="%.10g",
-            delimiter=",",
-            header=",".join(header),
-            comments="",
-        )
-        fig = Figure(figsize=(10, 6.5), layout="constrained")
-        FigureCanvasAgg(fig)
-        result.plot(fig=fig)
-        fig.savefig(tmp / "tracking.png", dpi=100)
 
 
 def _format_summary(summary: dict[str, Any]) -> str:
@@ -178,9 +155,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     out = Path(os.path.abspath(args.out)) if args.out is not None else None
     if out is not None:
         check_out(out, "flexarm simulate")
+    from ..sim.closed_loop import simulate
+
     try:
         result = simulate(scenario.arm, **scenario.simulate_kwargs(), progress=None)
-    except (TypeError, ValueError) as exc:  # e.g. a path outside the workspace
+    except (InvalidValueError, InvalidTypeError) as exc:  # e.g. a path outside the workspace
         raise UsageError(f"flexarm simulate: error: {scenario.source}: {exc}") from None
     except SimulationError as exc:
         print(
@@ -196,12 +175,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             "settings": scenario.description,
             "run": result.info,
             "out": args.out,
-            "files": [] if out is None else list(OUTPUT_FILES),
+            "files": [] if out is None else list(RESULT_FILES),
         }
     )
     if out is not None:
         try:
-            _write_outputs(out, result, summary)
+            result.write(out, summary)
         except OSError as exc:
             print(f"flexarm simulate: error: cannot write {str(out)!r}: {exc}", file=sys.stderr)
             return EXIT_FAILURE
@@ -210,7 +189,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     else:
         print(_format_summary(summary))
         if out is not None:
-            print(f"  results in {out}: {', '.join(OUTPUT_FILES)}")
+            print(f"  results in {out}: {', '.join(RESULT_FILES)}")
     return 0
 
 
@@ -218,7 +197,7 @@ _SIMULATE_DESCRIPTION = """\
 Simulate the closed loop: by default the paper's arm (two 4.5 m links, one mode each)
 tracking the default square (20 s) under the paper's Jacobian-transpose PD gains with
 joint encoders. --scenario FILE.toml sets anything (arm, trajectory, sensor, controller,
-delay, shaper, simulation; schema in flexarm.sim.scenario, example in
+delay, shaper, simulation; schema in flexarm.sim.scenario_schema, example in
 examples/paper_square.toml); options given on the command line override the file.
 """
 

@@ -36,11 +36,14 @@ from typing import Any
 import numba as nb
 import numpy as np
 from numba import carray  # type: ignore[attr-defined]
-from numpy.typing import NDArray
+from numba.core.ccallback import CFunc
+from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..fuzzy import CompiledFuzzySystem, FuzzySystem, evaluate_into, paper_system, workspace_size
+from ..model.plant import Plant
+from ..sensing.sensors import Sensor
 from .controllers import (
     CONTROL_SIGNATURE,
     Controller,
@@ -48,6 +51,7 @@ from .controllers import (
     jacobian_transpose_law,
     operational_lengths,
 )
+from .signals import y_modes
 
 __all__ = ["ADAPTATION_LAWS", "FuzzyAdaptiveJTPD", "tip_deflections"]
 
@@ -129,7 +133,7 @@ def _fuzzy_jt_pd(
     system = _unpack_fls(p, o + n * m)
     # scratch: s[0] = last lambda, s[1] = last gain, s[2:2+n] = FLS inputs, then the workspace
     x = s[2 : 2 + n]
-    modal = y[2 * n + 4 :]
+    modal = y[y_modes(n) :]
     for i in range(n):
         acc = 0.0
         for j in range(m):
@@ -154,7 +158,7 @@ def fuzzy_jt_pd_cfunc(t, y, ny, r, nr, p, n_p, s, ns, tau, nt):  # type: ignore[
     )
 
 
-def tip_deflections(arm: Any) -> F64:
+def tip_deflections(arm: Plant) -> F64:
     """The matrix mapping the modal coordinates to the links' tip deflections.
 
     Returns
@@ -200,8 +204,8 @@ class FuzzyAdaptiveJTPD(Controller):
     (``state[1]``); ``result.info["controller_state"]`` holds its final value.
     """
 
-    kp: Any = 150.79
-    kd: Any = 17.364
+    kp: ArrayLike = 150.79
+    kd: ArrayLike = 17.364
     ks: float = 1.0
     law: str = "scaled"
     fls: FuzzySystem | None = None
@@ -219,7 +223,7 @@ class FuzzyAdaptiveJTPD(Controller):
 
     @classmethod
     def from_arm(
-        cls, arm: Any, zeta: float = 0.707, *, ks: float = 1.0, law: str = "scaled"
+        cls, arm: Plant, zeta: float = 0.707, *, ks: float = 1.0, law: str = "scaled"
     ) -> FuzzyAdaptiveJTPD:
         """The paper's gains (as :meth:`JacobianTransposePD.from_arm`) with adaptation."""
         from .controllers import JacobianTransposePD
@@ -238,7 +242,7 @@ class FuzzyAdaptiveJTPD(Controller):
         fls = self.system
         return float(fls(*([0.0] * len(fls.inputs))))
 
-    def gain(self, deflections: Any) -> F64:
+    def gain(self, deflections: ArrayLike) -> F64:
         """The adapted gain ``lambda / lambda0`` for tip deflections in m.
 
         Parameters
@@ -253,10 +257,10 @@ class FuzzyAdaptiveJTPD(Controller):
         return np.asarray(self.system(*np.moveaxis(d, -1, 0)), dtype=float) / self.lambda0
 
     @property
-    def cfunc(self) -> Any:
+    def cfunc(self) -> CFunc:
         return fuzzy_jt_pd_cfunc
 
-    def _checked_system(self, arm: Any) -> CompiledFuzzySystem:
+    def _checked_system(self, arm: Plant) -> CompiledFuzzySystem:
         owner = "FuzzyAdaptiveJTPD"
         fls = self.system
         if len(fls.inputs) != arm.n_links:
@@ -272,10 +276,10 @@ class FuzzyAdaptiveJTPD(Controller):
             )
         return fls.compiled()
 
-    def parameters(self, arm: Any) -> F64:
+    def parameters(self, arm: Plant) -> F64:
         return self.parameters_for(arm, None)
 
-    def parameters_for(self, arm: Any, sensor: Any) -> F64:
+    def parameters_for(self, arm: Plant, sensor: Sensor | None) -> F64:
         owner = "FuzzyAdaptiveJTPD"
         kp = _gain_matrix(self.kp, "kp", owner)
         kd = _gain_matrix(self.kd, "kd", owner)
@@ -294,7 +298,7 @@ class FuzzyAdaptiveJTPD(Controller):
             ]
         )
 
-    def initial_state(self, arm: Any) -> F64:
+    def initial_state(self, arm: Plant) -> F64:
         compiled = self._checked_system(arm)
         state = np.zeros(2 + arm.n_links + int(workspace_size(compiled)))
         state[0] = self.lambda0

@@ -32,17 +32,31 @@ it in :class:`CompiledController`.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
 
 import numba as nb
 import numpy as np
 from numba import carray, types  # type: ignore[attr-defined]
+from numba.core.ccallback import CFunc
 from numpy.typing import ArrayLike, NDArray
 
+from .._compile import njit_runtime_free
 from .._validation import check_array, check_real
 from ..errors import InvalidTypeError, InvalidValueError
-from ..model.dynamics import njit_runtime_free
+from ..model.kinematics import lever_lengths
+from ..model.plant import Plant
+from ..sensing.sensors import Sensor
+from .signals import (
+    r_angles,
+    r_position,
+    r_rates,
+    r_velocity,
+    y_angles,
+    y_point,
+    y_point_rate,
+    y_rates,
+)
 
 __all__ = [
     "CONTROL_SIGNATURE",
@@ -64,7 +78,7 @@ CONTROL_SIGNATURE = types.void(
 """``void(t, y*, ny, r*, nr, params*, np, state*, ns, tau*, ntau)``"""
 
 
-def wrap_control_function(fn: Any, cache: bool = False) -> Any:
+def wrap_control_function(fn: Callable[..., None], cache: bool = False) -> CFunc:
     """Turn ``fn(t, y, r, params, state, tau)`` (a ``numba.njit`` function of
     arrays) into a ``numba.cfunc`` with :data:`CONTROL_SIGNATURE`."""
 
@@ -87,8 +101,9 @@ def _joint_pd(
     t: float, y: F64, r: F64, p: F64, s: F64, tau: F64
 ) -> None:  # pragma: no cover - compiled
     n = tau.shape[0]
+    ra, rr, ya, yr = r_angles(n), r_rates(n), y_angles(n), y_rates(n)
     for i in range(n):
-        tau[i] = p[i] * (r[6 + i] - y[i]) + p[n + i] * (r[6 + n + i] - y[n + i])
+        tau[i] = p[i] * (r[ra + i] - y[ya + i]) + p[n + i] * (r[rr + i] - y[yr + i])
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -99,18 +114,18 @@ def jacobian_transpose_law(
     parameter layout (``Kp``, ``Kd`` row-major in ``p[0:8]``, lever lengths in
     ``p[8:8+N]``); the scale factors let adaptive laws reuse it."""
     n = tau.shape[0]
-    px, py = y[2 * n], y[2 * n + 1]
-    vx, vy = y[2 * n + 2], y[2 * n + 3]
-    ex, ey = r[0] - px, r[1] - py
-    evx, evy = r[2] - vx, r[3] - vy
+    yp, yv, rp, rv = y_point(n), y_point_rate(n), r_position(n), r_velocity(n)
+    ex, ey = r[rp] - y[yp], r[rp + 1] - y[yp + 1]
+    evx, evy = r[rv] - y[yv], r[rv + 1] - y[yv + 1]
     fx = stiffness * (p[0] * ex + p[1] * ey) + damping * (p[4] * evx + p[5] * evy)
     fy = stiffness * (p[2] * ex + p[3] * ey) + damping * (p[6] * evx + p[7] * evy)
     # rigid Jacobian: column k = sum_{i >= k} L_i (-sin phi_i, cos phi_i)
     phi = 0.0
     for i in range(n):
         tau[i] = 0.0
+    ya = y_angles(n)
     for i in range(n):
-        phi += y[i]
+        phi += y[ya + i]
         jx = -p[8 + i] * math.sin(phi)
         jy = p[8 + i] * math.cos(phi)
         contrib = jx * fx + jy * fy
@@ -161,16 +176,16 @@ class Controller:
     name = "controller"
 
     @property
-    def cfunc(self) -> Any:  # pragma: no cover - interface
+    def cfunc(self) -> CFunc:  # pragma: no cover - interface
         raise NotImplementedError
 
-    def parameters(self, arm: Any) -> NDArray[np.float64]:  # pragma: no cover - interface
+    def parameters(self, arm: Plant) -> NDArray[np.float64]:  # pragma: no cover - interface
         raise NotImplementedError
 
-    def initial_state(self, arm: Any) -> NDArray[np.float64]:
+    def initial_state(self, arm: Plant) -> NDArray[np.float64]:
         return np.zeros(0)
 
-    def parameters_for(self, arm: Any, sensor: Any) -> NDArray[np.float64]:
+    def parameters_for(self, arm: Plant, sensor: Sensor | None) -> NDArray[np.float64]:
         """The ``params`` vector for ``arm`` read through ``sensor`` (what the
         simulator passes). Default: :meth:`parameters`; operational-space laws
         use the sensed point's Jacobian."""
@@ -207,7 +222,7 @@ class Controller:
         return tau
 
 
-def _ptr(a: NDArray[np.float64]) -> Any:
+def _ptr(a: NDArray[np.float64]) -> object:
     import ctypes
 
     return a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
@@ -241,24 +256,20 @@ def _gain_matrix(value: ArrayLike, name: str, owner: str) -> NDArray[np.float64]
     return g
 
 
-def operational_lengths(arm: Any, sensor: Any = None) -> NDArray[np.float64]:
+def operational_lengths(arm: Plant, sensor: Sensor | None = None) -> NDArray[np.float64]:
     """Lever lengths of the rigid Jacobian of the point an operational-space law controls.
 
     The end effector (the link lengths) for joint encoders and the tip; for a
-    point ``distance`` along link ``l``: ``L_0, ..., L_{l-1}, distance, 0, ...``,
-    so that ``J' F`` is the rigid Jacobian of the sensed point and the law is a
-    PD in that point's operational space.
+    point ``distance`` along link ``l``: ``L_0, ..., L_{l-1}, distance, 0, ...``
+    (:func:`flexarm.model.kinematics.lever_lengths`), so that ``J' F`` is the
+    rigid Jacobian of the sensed point and the law is a PD in that point's
+    operational space.
     """
-    lengths = np.array([lk.length for lk in arm.links], dtype=float)
+    lengths = np.array(arm.link_lengths, dtype=float)
     if sensor is None:
         return lengths
     link, distance, _ = sensor.resolve(arm)
-    if link < 0:
-        return lengths
-    out = np.zeros_like(lengths)
-    out[:link] = lengths[:link]
-    out[link] = distance
-    return out
+    return lengths if link < 0 else lever_lengths(lengths, link, distance)
 
 
 @dataclass(frozen=True)
@@ -273,15 +284,15 @@ class JointPD(Controller):
         Derivative gains, N m s/rad (>= 0).
     """
 
-    kp: Any = 100.0
-    kd: Any = 10.0
+    kp: ArrayLike = 100.0
+    kd: ArrayLike = 10.0
     name = "joint-pd"
 
     @property
-    def cfunc(self) -> Any:
+    def cfunc(self) -> CFunc:
         return joint_pd_cfunc
 
-    def parameters(self, arm: Any) -> NDArray[np.float64]:
+    def parameters(self, arm: Plant) -> NDArray[np.float64]:
         n = arm.n_links
         kp = _gain_vector(self.kp, "kp", "JointPD", n)
         kd = _gain_vector(self.kd, "kd", "JointPD", n)
@@ -302,12 +313,12 @@ class JacobianTransposePD(Controller):
         Damping, N s/m.
     """
 
-    kp: Any = 150.79
-    kd: Any = 17.364
+    kp: ArrayLike = 150.79
+    kd: ArrayLike = 17.364
     name = "jt-pd"
 
     @classmethod
-    def from_arm(cls, arm: Any, zeta: float = 0.707) -> JacobianTransposePD:
+    def from_arm(cls, arm: Plant, zeta: float = 0.707) -> JacobianTransposePD:
         """The paper's gains from the first link's first clamped frequency ``omega_1``:
         ``Kp = omega_1**2 I``, ``Kd = 2 zeta omega_1 I``."""
         zeta = check_real(zeta, "zeta", "JacobianTransposePD.from_arm", nonnegative=True)
@@ -320,13 +331,13 @@ class JacobianTransposePD(Controller):
         return cls(kp=w1**2, kd=2.0 * zeta * w1)
 
     @property
-    def cfunc(self) -> Any:
+    def cfunc(self) -> CFunc:
         return jacobian_transpose_pd_cfunc
 
-    def parameters(self, arm: Any) -> NDArray[np.float64]:
+    def parameters(self, arm: Plant) -> NDArray[np.float64]:
         return self.parameters_for(arm, None)
 
-    def parameters_for(self, arm: Any, sensor: Any) -> NDArray[np.float64]:
+    def parameters_for(self, arm: Plant, sensor: Sensor | None) -> NDArray[np.float64]:
         kp = _gain_matrix(self.kp, "kp", "JacobianTransposePD")
         kd = _gain_matrix(self.kd, "kd", "JacobianTransposePD")
         return np.concatenate([kp.ravel(), kd.ravel(), operational_lengths(arm, sensor)])
@@ -357,11 +368,11 @@ class CompiledController(Controller):
     >>> ctrl = CompiledController(hold, params=[5.0])
     """
 
-    function: Any
-    params: Any = ()
-    state: Any = ()
+    function: Callable[..., None]
+    params: ArrayLike = ()
+    state: ArrayLike = ()
     name: str = "compiled"
-    _cfunc: list[Any] = field(default_factory=list, init=False, repr=False, compare=False)
+    _cfunc: list[CFunc] = field(default_factory=list, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if not hasattr(self.function, "py_func"):
@@ -377,13 +388,13 @@ class CompiledController(Controller):
         )
 
     @property
-    def cfunc(self) -> Any:
+    def cfunc(self) -> CFunc:
         if not self._cfunc:
             self._cfunc.append(wrap_control_function(self.function))
         return self._cfunc[0]
 
-    def parameters(self, arm: Any) -> NDArray[np.float64]:
+    def parameters(self, arm: Plant) -> NDArray[np.float64]:
         return np.asarray(self.params, dtype=float)
 
-    def initial_state(self, arm: Any) -> NDArray[np.float64]:
+    def initial_state(self, arm: Plant) -> NDArray[np.float64]:
         return np.array(self.state, dtype=float)

@@ -12,16 +12,26 @@ zero-order hold.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
-from ..sensing.sensors import check_sensor
+from ..model.arm import FlexibleArm
+from ..model.kinematics import lever_lengths, rigid_point
+from ..sensing.sensors import Sensor, check_sensor
 from .controllers import Controller
-from .signals import measurement_size, reference_size
+from .signals import (
+    measurement_size,
+    r_angles,
+    r_position,
+    reference_size,
+    y_angles,
+    y_modes,
+    y_point,
+    y_point_rate,
+    y_rates,
+)
 
 __all__ = ["closed_loop_matrix", "closed_loop_poles"]
 
@@ -29,55 +39,38 @@ F64 = NDArray[np.float64]
 _OWNER = "closed_loop_matrix"
 
 
-def _rigid_point(arm: Any, theta: F64, link: int, distance: float) -> F64:
-    q = np.zeros(arm.n_dof)
-    q[: arm.n_links] = theta
-    return np.asarray(arm.point_position(q, link, distance), dtype=float)
-
-
-def _measure(arm: Any, sensor: Any, q: F64, dq: F64, h: float) -> F64:
+def _measure(arm: FlexibleArm, sensor: Sensor, q: F64, dq: F64, h: float) -> F64:
     """The measurement ``y`` (:mod:`flexarm.control.signals`) of the state, undelayed
     (``h``: the difference step, rad or modal units, of the point's velocity)."""
     n_links = arm.n_links
+    ya, yr, yp, yv, ym = (f(n_links) for f in (y_angles, y_rates, y_point, y_point_rate, y_modes))
     y = np.zeros(measurement_size(n_links, sum(arm.n_modes)))
     cols = arm.motor_slice if arm.has_flexible_joints else slice(0, n_links)
-    y[:n_links], y[n_links : 2 * n_links] = q[cols], dq[cols]
+    y[ya : ya + n_links], y[yr : yr + n_links] = q[cols], dq[cols]
     link, distance, _ = sensor.resolve(arm)
     if link < 0:  # rigid kinematics of the encoder angles
-        theta, rate = y[:n_links], y[n_links : 2 * n_links]
-        phi, dphi = np.cumsum(theta), np.cumsum(rate)
-        lengths = np.array([lk.length for lk in arm.links])
-        y[2 * n_links : 2 * n_links + 2] = [
-            np.sum(lengths * np.cos(phi)),
-            np.sum(lengths * np.sin(phi)),
-        ]
-        y[2 * n_links + 2 : 2 * n_links + 4] = [
-            -np.sum(lengths * np.sin(phi) * dphi),
-            np.sum(lengths * np.cos(phi) * dphi),
-        ]
+        pos, vel = rigid_point(arm.link_lengths, q[cols], dq[cols])
+        assert vel is not None
+        y[yp : yp + 2], y[yv : yv + 2] = pos, vel
     else:  # the deflected point; its velocity is linear in dq (central difference)
-        y[2 * n_links : 2 * n_links + 2] = arm.point_position(q, link, distance)
+
+        def point(x: F64) -> F64:
+            return arm.point_position(x, link, distance)
+
+        y[yp : yp + 2] = point(q)
         speed = float(np.linalg.norm(dq))
         if speed > 0.0:
             u = dq / speed
-            y[2 * n_links + 2 : 2 * n_links + 4] = (
-                speed
-                * (
-                    arm.point_position(q + h * u, link, distance)
-                    - arm.point_position(q - h * u, link, distance)
-                )
-                / (2 * h)
-            )
-    modal = slice(n_links, n_links + sum(arm.n_modes))
-    y[2 * n_links + 4 :] = q[modal]
+            y[yv : yv + 2] = speed * (point(q + h * u) - point(q - h * u)) / (2 * h)
+    y[ym:] = q[n_links : n_links + sum(arm.n_modes)]
     return y
 
 
 def closed_loop_matrix(
-    arm: Any,
+    arm: FlexibleArm,
     controller: Controller,
     position: ArrayLike,
-    sensor: Any = None,
+    sensor: Sensor | None = None,
     *,
     elbow: str = "positive",
     step: float = 1e-6,
@@ -127,13 +120,13 @@ def closed_loop_matrix(
         q0[arm.motor_slice] = theta
     link, distance, _ = sensor.resolve(arm)
     r = np.zeros(reference_size(n_links))
-    point = (
-        target
-        if link < 0 or (link == n_links - 1 and distance == arm.links[-1].length)
-        else _rigid_point(arm, theta, link, distance)
+    short_of_tip = link >= 0 and not (
+        link == n_links - 1 and distance == arm.link_lengths[n_links - 1]
     )
-    r[0:2] = point
-    r[6 : 6 + n_links] = theta
+    if short_of_tip:
+        target = rigid_point(lever_lengths(arm.link_lengths, link, distance), theta)[0]
+    r[r_position(n_links) : r_position(n_links) + 2] = target
+    r[r_angles(n_links) : r_angles(n_links) + n_links] = theta
     params = np.ascontiguousarray(controller.parameters_for(arm, sensor), dtype=float)
 
     def field(x: F64) -> F64:
@@ -152,13 +145,17 @@ def closed_loop_matrix(
 
 
 def closed_loop_poles(
-    arm: Any,
+    arm: FlexibleArm,
     controller: Controller,
     position: ArrayLike,
-    sensor: Any = None,
-    **kwargs: Any,
+    sensor: Sensor | None = None,
+    *,
+    elbow: str = "positive",
+    step: float = 1e-6,
 ) -> NDArray[np.complex128]:
     """Eigenvalues of :func:`closed_loop_matrix`, rad/s, sorted by real part (largest first).
+
+    The parameters are those of :func:`closed_loop_matrix`.
 
     Examples
     --------
@@ -170,6 +167,6 @@ def closed_loop_poles(
     >>> bool(poles[0].real > 0)   # tip feedback: unstable
     True
     """
-    a = closed_loop_matrix(arm, controller, position, sensor, **kwargs)
+    a = closed_loop_matrix(arm, controller, position, sensor, elbow=elbow, step=step)
     poles = np.asarray(np.linalg.eigvals(a), dtype=np.complex128)
     return poles[np.argsort(-poles.real, kind="stable")]

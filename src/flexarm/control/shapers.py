@@ -66,7 +66,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import root
 
 from .._validation import check_array, check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
@@ -488,6 +487,8 @@ def _ei_equations(x: NDArray[np.float64], z: float, v: float) -> NDArray[np.floa
 
 def _ei_unit(z: float, v: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Damped EI amplitudes and times (s at ``w0 = 1 rad/s``), by continuation in ``z``."""
+    from scipy.optimize import root  # loaded on first use
+
     xz = math.acos(-(1.0 - v) / (1.0 + v))  # zeros of the undamped closed form
     x = np.array(
         [

@@ -1,41 +1,120 @@
-"""The layout of the signal vectors shared by the simulator and the controllers.
+"""The layout of the signal vectors a controller sees: the one definition.
 
-A controller sees two plain vectors each control period:
+Each control period a controller gets two plain vectors, for an arm of ``N``
+links with ``M`` modal coordinates in all:
 
-Measurement ``y``, length ``2 N + 4 + n_modes``::
+Measurement ``y``, length :func:`measurement_size` ``= 2 N + 4 + M``::
 
-    y[0:N]          collocated angles, rad: joint angles (rigid joints) or motor
-                    angles (flexible joints), as the encoders read them
-    y[N:2N]         their rates, rad/s
-    y[2N:2N+2]      position (x, y) of the sensed point, m: the rigid kinematics of
-                    the collocated angles for the joint sensor, the deflected point
-                    for a noncollocated sensor (possibly delayed, noisy, quantised)
-    y[2N+2:2N+4]    its velocity, m/s
-    y[2N+4:]        the links' modal coordinates (what a strain sensor or an
-                    estimator would give; the fuzzy law reads link deflections)
+    y[y_angles(N):+N]        collocated angles, rad: joint angles (rigid joints) or
+                             motor angles (flexible joints), as the encoders read them
+    y[y_rates(N):+N]         their rates, rad/s
+    y[y_point(N):+2]         position (x, y) of the sensed point, m: rigid kinematics
+                             of the collocated angles for the joint sensor, the sensed
+                             point for a point sensor (possibly delayed, noisy, quantised)
+    y[y_point_rate(N):+2]    its velocity, m/s
+    y[y_modes(N):+M]         the links' modal coordinates (what a strain sensor or an
+                             estimator would give; the fuzzy law reads link deflections)
 
-Reference ``r``, length ``6 + 2 N``::
+Reference ``r``, length :func:`reference_size` ``= 6 + 2 N``::
 
-    r[0:2]          commanded end-effector position, m
-    r[2:4]          velocity, m/s
-    r[4:6]          acceleration, m/s**2
-    r[6:6+N]        joint angles from inverse kinematics, rad
-    r[6+N:6+2N]     joint rates, rad/s
+    r[r_position(N):+2]      commanded position of the controlled point, m
+    r[r_velocity(N):+2]      velocity, m/s
+    r[r_acceleration(N):+2]  acceleration, m/s**2
+    r[r_angles(N):+N]        joint angles from inverse kinematics, rad
+    r[r_rates(N):+N]         joint rates, rad/s
+
+Every module and every compiled function that reads or writes these vectors
+uses the offset functions below (plain Python functions that Numba compiles
+inline where a compiled function calls them), so no offset is written twice.
 """
 
 from __future__ import annotations
 
-__all__ = ["R_ACC", "R_POS", "R_VEL", "Y_THETA", "measurement_size", "reference_size"]
+from numba.extending import register_jitable
 
-Y_THETA = 0
-R_POS, R_VEL, R_ACC = 0, 2, 4
+__all__ = [
+    "measurement_size",
+    "r_acceleration",
+    "r_angles",
+    "r_position",
+    "r_rates",
+    "r_velocity",
+    "reference_size",
+    "y_angles",
+    "y_modes",
+    "y_point",
+    "y_point_rate",
+    "y_rates",
+]
 
 
+@register_jitable
+def y_angles(n_links: int) -> int:
+    """Offset of the collocated angles in ``y``."""
+    return 0
+
+
+@register_jitable
+def y_rates(n_links: int) -> int:
+    """Offset of the collocated rates in ``y``."""
+    return n_links
+
+
+@register_jitable
+def y_point(n_links: int) -> int:
+    """Offset of the sensed point's position (x, y) in ``y``."""
+    return 2 * n_links
+
+
+@register_jitable
+def y_point_rate(n_links: int) -> int:
+    """Offset of the sensed point's velocity in ``y``."""
+    return 2 * n_links + 2
+
+
+@register_jitable
+def y_modes(n_links: int) -> int:
+    """Offset of the modal coordinates in ``y``."""
+    return 2 * n_links + 4
+
+
+@register_jitable
 def measurement_size(n_links: int, n_modes: int) -> int:
     """Length of ``y`` for ``n_links`` links and ``n_modes`` modal coordinates."""
-    return 2 * n_links + 4 + n_modes
+    return y_modes(n_links) + n_modes
 
 
+@register_jitable
+def r_position(n_links: int) -> int:
+    """Offset of the commanded position in ``r``."""
+    return 0
+
+
+@register_jitable
+def r_velocity(n_links: int) -> int:
+    """Offset of the commanded velocity in ``r``."""
+    return 2
+
+
+@register_jitable
+def r_acceleration(n_links: int) -> int:
+    """Offset of the commanded acceleration in ``r``."""
+    return 4
+
+
+@register_jitable
+def r_angles(n_links: int) -> int:
+    """Offset of the joint-angle references in ``r``."""
+    return 6
+
+
+@register_jitable
+def r_rates(n_links: int) -> int:
+    """Offset of the joint-rate references in ``r``."""
+    return 6 + n_links
+
+
+@register_jitable
 def reference_size(n_links: int) -> int:
     """Length of ``r`` for ``n_links`` links."""
-    return 6 + 2 * n_links
+    return r_rates(n_links) + n_links

@@ -1,4 +1,4 @@
-"""Planar end-effector reference paths and their joint-space references.
+"""Planar end-effector reference paths.
 
 Every trajectory is a frozen, validated dataclass that maps time ``t`` (s) to
 the position (m), velocity (m/s) and acceleration (m/s**2) of the end
@@ -22,18 +22,14 @@ effector in the base frame, through one interface (:class:`Trajectory`):
 
 The square is the paper's experiment (Sasiadek et al., 2014, Sec. V) but its
 size, placement and speed are not given; :class:`Square`'s defaults are
-flexarm's choice, documented there. :func:`joint_reference` turns a path into
-joint angles, rates and accelerations of a rigid two-link arm and
-:func:`sample` into the six-column table the simulator reads.
-
-This module sits below the arm in the layering: it imports only
-:mod:`flexarm._validation` and takes the arm by duck typing.
+flexarm's choice, documented there. :func:`sample` turns a path into a
+six-column table; :func:`flexarm.sim.references.joint_reference` into joint
+angles, rates and accelerations of a rigid two-link arm.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
 
@@ -50,7 +46,8 @@ __all__ = [
     "Square",
     "Trajectory",
     "Waypoints",
-    "joint_reference",
+    "check_trajectory",
+    "evaluation_times",
     "sample",
 ]
 
@@ -65,7 +62,7 @@ _Triple = tuple[_F, _F, _F]
 
 @runtime_checkable
 class Trajectory(Protocol):
-    """What the simulator, the metrics and :func:`joint_reference` need of a path."""
+    """What the simulator, the metrics and the reference pipeline need of a path."""
 
     @property
     def duration(self) -> float:
@@ -79,21 +76,6 @@ class Trajectory(Protocol):
         """Position (m), velocity (m/s) and acceleration (m/s**2) at ``t`` (s)."""
 
 
-class _KinematicArm(Protocol):
-    """The part of :class:`flexarm.FlexibleArm` that :func:`joint_reference` uses."""
-
-    @property
-    def n_links(self) -> int: ...
-
-    @property
-    def links(self) -> Sequence[Any]: ...
-
-    def inverse_kinematics(self, position: ArrayLike, elbow: str = ...) -> _F: ...
-
-    def jacobian(self, theta: ArrayLike) -> _F: ...
-
-
-# ------------------------------------------------------------------ helpers
 def _point(value: Any, name: str, owner: str) -> tuple[float, float]:
     arr = check_array(value, name, owner, shape=(2,))
     if arr.dtype.kind == "c":
@@ -103,7 +85,7 @@ def _point(value: Any, name: str, owner: str) -> tuple[float, float]:
     return (float(arr[0]), float(arr[1]))
 
 
-def _times(t: ArrayLike, owner: str) -> tuple[_F, bool]:
+def evaluation_times(t: ArrayLike, owner: str) -> tuple[_F, bool]:
     """``t`` as a float array of shape ``(m,)`` and whether it was a scalar."""
     arr = check_array(t, "t", owner)
     if arr.dtype.kind == "c":
@@ -284,7 +266,7 @@ class Square:
         position, velocity, acceleration : ndarray, shape (m, 2) or (2,)
             In m, m/s and m/s**2.
         """
-        tt, scalar = _times(t, f"{type(self).__name__}.evaluate")
+        tt, scalar = evaluation_times(t, f"{type(self).__name__}.evaluate")
         knot_t, knot_p = self._knots()
         return _shape_out(_piecewise(tt, knot_t, knot_p, self.timing == "quintic"), scalar)
 
@@ -360,7 +342,7 @@ class Circle:
         position, velocity, acceleration : ndarray, shape (m, 2) or (2,)
             In m, m/s and m/s**2.
         """
-        tt, scalar = _times(t, f"{type(self).__name__}.evaluate")
+        tt, scalar = evaluation_times(t, f"{type(self).__name__}.evaluate")
         omega = (2.0 * math.pi / self.period) * (1.0 if self.direction == "ccw" else -1.0)
         moving = ((tt >= 0.0) & (tt < self.duration))[:, None]
         angle = self.phase + omega * np.clip(tt, 0.0, self.duration)
@@ -428,7 +410,7 @@ class Line:
         position, velocity, acceleration : ndarray, shape (m, 2) or (2,)
             In m, m/s and m/s**2.
         """
-        tt, scalar = _times(t, f"{type(self).__name__}.evaluate")
+        tt, scalar = evaluation_times(t, f"{type(self).__name__}.evaluate")
         knot_t = np.array([0.0, self.duration])
         knot_p = np.array([self.start, self.end])
         return _shape_out(_piecewise(tt, knot_t, knot_p, self.timing == "quintic"), scalar)
@@ -542,14 +524,15 @@ class Waypoints:
         position, velocity, acceleration : ndarray, shape (m, 2) or (2,)
             In m, m/s and m/s**2.
         """
-        tt, scalar = _times(t, f"{type(self).__name__}.evaluate")
+        tt, scalar = evaluation_times(t, f"{type(self).__name__}.evaluate")
         knot_t = np.array(self.times)
         knot_p = np.array(self.points)
         return _shape_out(_piecewise(tt, knot_t, knot_p, self.interpolation == "quintic"), scalar)
 
 
 # ------------------------------------------------------------------ consumers
-def _check_trajectory(trajectory: Any, owner: str) -> None:
+def check_trajectory(trajectory: object, owner: str) -> None:
+    """Raise InvalidTypeError naming ``owner`` unless ``trajectory`` is a :class:`Trajectory`."""
     if not isinstance(trajectory, Trajectory):
         raise InvalidTypeError(
             f"The 'trajectory' parameter of {owner} must be a trajectory (with duration, "
@@ -578,98 +561,6 @@ def sample(trajectory: Trajectory, t: ArrayLike) -> _F:
     >>> sample(Square(), [0.0, 5.0]).tolist()
     [[3.0, -2.0, 0.8, 0.0, 0.0, 0.0], [7.0, -2.0, 0.0, 0.8, 0.0, 0.0]]
     """
-    _check_trajectory(trajectory, "sample")
+    check_trajectory(trajectory, "sample")
     pos, vel, acc = trajectory.evaluate(np.atleast_1d(np.asarray(t, dtype=float)))
     return np.column_stack([pos, vel, acc])
-
-
-def joint_reference(
-    arm: _KinematicArm,
-    trajectory: Trajectory,
-    t: ArrayLike,
-    elbow: str = "positive",
-    *,
-    singularity_tol: float = 1e-3,
-) -> _Triple:
-    """Joint angles, rates and accelerations of a rigid two-link arm that follow a path.
-
-    ``theta`` comes from ``arm.inverse_kinematics``; the rates solve
-    ``J(theta) dtheta = v`` and the accelerations
-    ``J(theta) ddtheta = a - Jdot(theta, dtheta) dtheta``, where for a planar
-    chain with absolute link angles ``phi_i = theta_1 + ... + theta_i``,
-    ``Jdot dtheta = -sum_i L_i dphi_i**2 (cos phi_i, sin phi_i)``.
-
-    Parameters
-    ----------
-    arm : FlexibleArm or alike
-        Two-link arm: needs ``n_links``, ``links[i].length`` (m),
-        ``inverse_kinematics(position, elbow)`` and ``jacobian(theta)``.
-    trajectory : Trajectory
-        The end-effector path.
-    t : float or array_like, shape (m,)
-        Times, s.
-    elbow : {"positive", "negative"}
-        The inverse-kinematics branch (sign of ``theta_2``).
-    singularity_tol : float
-        Smallest allowed ``|det J| / (L_1 L_2) = |sin theta_2|`` (> 0). The
-        default 1e-3 (``theta_2`` within 0.057 deg of 0 or pi: full reach or
-        folded back over the base) is where the rates exceed ~1000 times the
-        path speed divided by a link length.
-
-    Returns
-    -------
-    theta, dtheta, ddtheta : ndarray, shape (m, 2) or (2,)
-        In rad, rad/s and rad/s**2. ``theta_1`` is wrapped to ``[-pi, pi)``
-        as the inverse kinematics return it (use ``numpy.unwrap`` along time
-        for a path that circles the base).
-
-    Raises
-    ------
-    ValueError
-        If the arm does not have two links, the path leaves the workspace at
-        some ``t``, or passes within ``singularity_tol`` of a singularity at
-        some ``t`` (only the sampled times are checked).
-
-    Examples
-    --------
-    >>> from flexarm import FlexibleArm
-    >>> th, dth, ddth = joint_reference(FlexibleArm.paper(), Square(), [0.0, 2.5])
-    >>> th.shape, dth.shape
-    ((2, 2), (2, 2))
-    """
-    owner = "joint_reference"
-    _check_trajectory(trajectory, owner)
-    check_option(elbow, "elbow", owner, ELBOWS)
-    tol = check_real(singularity_tol, "singularity_tol", owner, positive=True)
-    n = int(arm.n_links)
-    if n != 2:
-        raise InvalidValueError(
-            f"The 'arm' parameter of {owner} must have 2 links. Got {n} links instead."
-        )
-    tt, scalar = _times(t, owner)
-    pos, vel, acc = trajectory.evaluate(tt)
-    try:
-        theta = arm.inverse_kinematics(pos, elbow=elbow)
-    except ValueError as exc:
-        raise InvalidValueError(
-            f"The 'trajectory' parameter of {owner} must stay inside the arm's workspace. {exc}"
-        ) from exc
-    lengths = np.array([float(lk.length) for lk in arm.links])
-    jac = arm.jacobian(theta)
-    near = np.abs(np.linalg.det(jac)) / (lengths[0] * lengths[1])
-    if np.any(near < tol):
-        k = int(np.argmax(near < tol))
-        raise InvalidValueError(
-            f"The 'trajectory' parameter of {owner} must stay clear of singularities, "
-            f"with |det J| / (L1 L2) >= {tol}. Got {near[k]:.3g} at t = {tt[k]} s, at "
-            f"{pos[k].tolist()} m ({int(np.sum(near < tol))} samples too close) instead."
-        )
-    dtheta: _F = np.linalg.solve(jac, vel[:, :, None])[:, :, 0].astype(np.float64)
-    phi = np.cumsum(theta, axis=1)
-    dphi = np.cumsum(dtheta, axis=1)
-    weight = lengths * dphi**2
-    jdot_dtheta = -np.stack(
-        [np.sum(weight * np.cos(phi), axis=1), np.sum(weight * np.sin(phi), axis=1)], axis=1
-    )
-    ddtheta: _F = np.linalg.solve(jac, (acc - jdot_dtheta)[:, :, None])[:, :, 0]
-    return _shape_out((theta, dtheta, ddtheta), scalar)

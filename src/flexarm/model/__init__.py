@@ -1,3 +1,53 @@
-"""model"""
+"""The plant: beam modes, links, joints, the arm and its compiled dynamics.
 
-__all__: list[str] = []
+* :mod:`~flexarm.model.modes` — Euler–Bernoulli assumed modes (clamped-free, clamped-mass);
+* :mod:`~flexarm.model.link`, :mod:`~flexarm.model.joints` — link and joint parameters;
+* :mod:`~flexarm.model.arm` — :class:`FlexibleArm`, the NumPy reference of the dynamics;
+* :mod:`~flexarm.model.kinematics`, :mod:`~flexarm.model.lagrangian` — its kinematics and
+  Lagrangian as functions of arrays;
+* :mod:`~flexarm.model.arrays`, :mod:`~flexarm.model.dynamics` — the arm packed as plain
+  arrays and the compiled kernels that read them (for your own Numba loops);
+* :mod:`~flexarm.model.plant` — :class:`Plant`, what the simulator reads of an arm.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .._lazy import attach
+
+_SUBMODULES = (
+    "arm",
+    "arrays",
+    "dynamics",
+    "joints",
+    "kinematics",
+    "lagrangian",
+    "link",
+    "modes",
+    "plant",
+)
+_NAMES = {
+    "BeamModes": "modes",
+    "FlexibleArm": "arm",
+    "LinearJoint": "joints",
+    "Link": "link",
+    "MakkarFriction": "joints",
+    "NonlinearJoint": "joints",
+    "Plant": "plant",
+    "cantilever_roots": "modes",
+    "clamped_mass_roots": "modes",
+}
+
+__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
+
+if TYPE_CHECKING:  # what type checkers see; nothing is imported at run time
+    from .arm import FlexibleArm as FlexibleArm
+    from .joints import LinearJoint as LinearJoint
+    from .joints import MakkarFriction as MakkarFriction
+    from .joints import NonlinearJoint as NonlinearJoint
+    from .link import Link as Link
+    from .modes import BeamModes as BeamModes
+    from .modes import cantilever_roots as cantilever_roots
+    from .modes import clamped_mass_roots as clamped_mass_roots
+    from .plant import Plant as Plant

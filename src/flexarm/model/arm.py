@@ -55,27 +55,18 @@ inertia of everything outboard: all outboard beams, hubs and the payload, with
 the outboard chain straight (joint angles zero) and its inertia taken about
 the tip of link ``i``.
 
-Computation
------------
-For link ``i`` the body velocity ``nu = (u, alpha_dot, delta_dot)`` (``u`` the
-joint's velocity in the link frame) is ``Jb_i(q) qdot``, and the link's kinetic
-energy is ``1/2 nu' Mb_i(delta) nu`` with the modal integrals of
-:class:`flexarm.modes.BeamModes`. Then ``M = sum Jb' Mb Jb``, and by
-d'Alembert the velocity terms are ``C qdot = sum Jb' beta``, ``beta`` being the
-body-frame inertial force at ``qddot = 0``. :meth:`FlexibleArm.coriolis`
-returns the Christoffel matrix (``Mdot - 2C`` skew-symmetric) built from exact
-complex-step derivatives of ``M``.
+The Lagrangian is evaluated body by body (:mod:`flexarm.model.lagrangian`);
+:meth:`FlexibleArm.coriolis` returns the Christoffel matrix (``Mdot - 2C``
+skew-symmetric) from exact complex-step derivatives of ``M``.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import (
@@ -87,10 +78,15 @@ from .._validation import (
     validate_real_fields,
 )
 from ..errors import InvalidTypeError, InvalidValueError
-from . import dynamics as kernels
+from .arrays import (
+    ArmArrays,
+)
 from .joints import LinearJoint, NonlinearJoint
+from .kinematics import deflected_point, rigid_jacobian, rigid_point, two_link_inverse_kinematics
+from .lagrangian import body_terms
 from .link import Link
 from .modes import NORMALIZATIONS, BeamModes
+from .packing import outboard_loads, pack
 
 __all__ = ["BOUNDARIES", "FRICTION_SIDES", "FlexibleArm"]
 
@@ -182,10 +178,10 @@ class FlexibleArm:
                 normalization=self.mode_normalization,
                 amplitude=self.mode_amplitude,
             )
-            for lk, (tm, tj) in zip(links, self._tip_loads(), strict=True)
+            for lk, (tm, tj) in zip(links, outboard_loads(self), strict=True)
         )
         self._derived["modes"] = modes
-        self._derived["arrays"] = self._pack()
+        self._derived["arrays"] = pack(self)
 
     # ------------------------------------------------------------ construction
     @classmethod
@@ -211,74 +207,6 @@ class FlexibleArm:
             )
         checked: tuple[LinearJoint | NonlinearJoint, ...] = joints
         return checked
-
-    def _tip_loads(self) -> list[tuple[float, float]]:
-        """Tip mass and inertia (about the tip) loading each link's modes."""
-        links = self.links
-        if self.boundary == "clamped-free":
-            return [(0.0, 0.0)] * len(links)
-        loads = []
-        for i in range(len(links)):
-            mass = self.payload_mass
-            inertia = self.payload_inertia
-            d = 0.0  # distance from tip i to the base of the next outboard link
-            for k, lk in enumerate(links[i + 1 :], start=i + 1):
-                mass += lk.hub_mass + lk.mass
-                inertia += lk.hub_mass * d**2 + lk.hub_inertia
-                if self.joints is not None:
-                    inertia += self.joints[k].motor_inertia
-                inertia += lk.linear_density * ((d + lk.length) ** 3 - d**3) / 3.0
-                d += lk.length
-            inertia += self.payload_mass * d**2
-            loads.append((mass, inertia))
-        return loads
-
-    def _pack(self) -> kernels.ArmArrays:
-        n, N = self.n_dof, self.n_links
-        start = np.zeros(N + 1, dtype=np.int64)
-        start[0] = N
-        for i, lk in enumerate(self.links):
-            start[i + 1] = start[i] + lk.n_modes
-        link = np.zeros((N, kernels.N_LINK_COLUMNS))
-        v, w, h, g = (np.zeros(n) for _ in range(4))
-        md = np.zeros((n, n))
-        k, d = np.zeros(n), np.zeros(n)
-        for i, (lk, bm) in enumerate(zip(self.links, self.modes, strict=True)):
-            L, rho = lk.length, lk.linear_density
-            link[i] = (L, rho * L, rho * L**2 / 2, rho * L**3 / 3 + lk.hub_inertia, lk.hub_mass)
-            s = slice(start[i], start[i + 1])
-            v[s], w[s] = bm.mass_integral, bm.moment_integral
-            h[s], g[s] = bm.tip_deflection, bm.tip_slope
-            md[s, s] = bm.modal_mass
-            k[s] = np.diag(bm.modal_stiffness)
-            d[s] = 2.0 * lk.modal_damping * bm.frequencies * np.diag(bm.generalized_mass)
-        joint = np.zeros((len(self.joints or ()), kernels.N_JOINT_COLUMNS))
-        for i, jt in enumerate(self.joints or ()):
-            row = joint[i]
-            row[kernels.J_A1 : kernels.J_ASW + 1] = jt.spring_params
-            row[kernels.J_INERTIA] = jt.motor_inertia
-            row[kernels.J_DAMPING] = jt.motor_damping
-            row[kernels.J_COUPLED] = float(self.rotor_coupling)
-            if jt.friction is not None:
-                row[kernels.J_HAS_FRICTION] = 1.0
-                row[kernels.J_FRICTION_ON_MOTOR] = float(self.joint_friction == "motor")
-                row[kernels.J_G1 :] = jt.friction.params
-        arrays = kernels.ArmArrays(
-            start,
-            link,
-            v,
-            w,
-            h,
-            g,
-            md,
-            k,
-            d,
-            np.array([self.payload_mass, self.payload_inertia]),
-            joint,
-        )
-        for a in arrays:
-            a.flags.writeable = False
-        return arrays
 
     # -------------------------------------------------------------- structure
     @property
@@ -307,7 +235,7 @@ class FlexibleArm:
         return self._derived["modes"]  # type: ignore[no-any-return]
 
     @property
-    def arrays(self) -> kernels.ArmArrays:
+    def arrays(self) -> ArmArrays:
         """The arm packed for the compiled kernels (read-only arrays)."""
         return self._derived["arrays"]  # type: ignore[no-any-return]
 
@@ -401,80 +329,6 @@ class FlexibleArm:
         return arr
 
     # --------------------------------------------------- body Jacobians (NumPy)
-    def _body_terms(self, q: NDArray[Any], dq: NDArray[Any] | None) -> list[tuple[Any, ...]]:
-        """Per body: (Jb, Mb, beta) with ``T = 1/2 (Jb dq)' Mb (Jb dq)`` and the
-        inertial force ``Jb' beta`` at ``qddot = 0`` (``beta`` is None when
-        ``dq`` is None). Works for real and complex ``q`` (complex step)."""
-        n, N = self.n_dof, self.n_links
-        dtype = np.result_type(q, float)
-        a = self.arrays
-        U = np.zeros((2, n), dtype=dtype)  # velocity Jacobian of the current joint, link frame
-        A = np.zeros(n)  # gradient of the link's absolute angle (constant)
-        b = np.zeros(2, dtype=dtype)  # inertial acceleration of the joint at qddot = 0
-        bodies: list[tuple[Any, ...]] = []
-        ad = 0.0
-        for i in range(N):
-            s = self.modal_slice(i)
-            if i > 0:
-                prev = self.modal_slice(i - 1)
-                gamma = q[i] + a.tip_slope[prev] @ q[prev]
-                Rt = np.array([[np.cos(gamma), np.sin(gamma)], [-np.sin(gamma), np.cos(gamma)]])
-                U, b = Rt @ U, Rt @ b
-                A = A.copy()
-                A[prev] += a.tip_slope[prev]
-            if self.joints is not None:
-                # rotor i spins at (carrier angle rate + dq_mi); A is the carrier's gradient
-                row = A.copy() if self.rotor_coupling else np.zeros(n)
-                row[self.motor_slice.start + i] += 1.0
-                jm = self.joints[i].motor_inertia
-                bodies.append((row[None, :], np.array([[jm]]), None if dq is None else np.zeros(1)))
-            if i > 0:
-                mh = self.links[i].hub_mass
-                bodies.append((U.copy(), mh * np.eye(2), None if dq is None else mh * b))
-            A = A.copy()
-            A[i] += 1.0
-            L, m, cx, ia, _ = a.link[i]
-            delta = q[s]
-            v, w, mdelta = a.mass_integral[s], a.moment_integral[s], a.modal_mass[s, s]
-            nm = delta.shape[0]
-            D = np.zeros((nm, n))
-            D[:, s] = np.eye(nm)
-            Jb = np.vstack([U, A[None, :], D])
-            Mb = np.zeros((3 + nm, 3 + nm), dtype=dtype)
-            Mb[0, 0] = Mb[1, 1] = m
-            Mb[0, 2] = Mb[2, 0] = -(v @ delta)
-            Mb[1, 2] = Mb[2, 1] = cx
-            Mb[1, 3:] = Mb[3:, 1] = v
-            Mb[2, 2] = ia + delta @ mdelta @ delta
-            Mb[2, 3:] = Mb[3:, 2] = w
-            Mb[3:, 3:] = mdelta
-            beta = None
-            e = a.tip_deflection[s] @ delta
-            if dq is not None:
-                ad = A @ dq
-                dd = dq[s]
-                beta = np.concatenate(
-                    [
-                        [m * b[0] - ad**2 * cx - 2 * ad * (v @ dd)],
-                        [m * b[1] - ad**2 * (v @ delta)],
-                        [-b[0] * (v @ delta) + 2 * ad * (delta @ mdelta @ dd) + cx * b[1]],
-                        v * b[1] - ad**2 * (mdelta @ delta),
-                    ]
-                )
-                ed = a.tip_deflection[s] @ dd
-                b = b + np.array([-(ad**2) * L - 2 * ad * ed, -(ad**2) * e])
-            bodies.append((Jb, Mb, beta))
-            U = U + np.vstack([-e * A, L * A])
-            U[1, s] += a.tip_deflection[s]
-        s = self.modal_slice(N - 1)
-        Ap = A.copy()
-        Ap[s] += a.tip_slope[s]
-        mp, jp = self.payload_mass, self.payload_inertia
-        bodies.append((U.copy(), mp * np.eye(2), None if dq is None else mp * b))
-        bodies.append((Ap[None, :], np.array([[jp]]), None if dq is None else np.zeros(1)))
-        return bodies
-
-    # ---------------------------------------------------------------- dynamics
     def mass_matrix(self, q: ArrayLike) -> NDArray[Any]:
         """Mass matrix ``M(q)``, shape ``(n_dof, n_dof)``, symmetric positive definite.
 
@@ -485,13 +339,19 @@ class FlexibleArm:
             values are accepted (used for complex-step derivatives).
         """
         q = self._check_q(q)
-        M = sum(Jb.T @ Mb @ Jb for Jb, Mb, _ in self._body_terms(q, None))
-        return 0.5 * (M + M.T)  # type: ignore[no-any-return]
+        M = np.zeros((self.n_dof, self.n_dof), dtype=np.result_type(q, float))
+        for Jb, Mb, _ in body_terms(self, q, None):
+            M += Jb.T @ Mb @ Jb
+        return 0.5 * (M + M.T)
 
     def velocity_terms(self, q: ArrayLike, dq: ArrayLike) -> NDArray[np.float64]:
         """Centrifugal and Coriolis forces ``C(q, dq) dq``, shape ``(n_dof,)``."""
         q, dq = self._check_q(q), self._check_q(dq, "dq")
-        return sum(Jb.T @ beta for Jb, _, beta in self._body_terms(q, dq))  # type: ignore[no-any-return]
+        h = np.zeros(self.n_dof, dtype=np.result_type(q, dq, float))
+        for Jb, _, beta in body_terms(self, q, dq):
+            assert beta is not None
+            h += Jb.T @ beta
+        return h
 
     def mass_matrix_derivatives(self, q: ArrayLike) -> NDArray[np.float64]:
         """``dM/dq_k`` for every ``k``, shape ``(n_dof, n_dof, n_dof)`` (k first),
@@ -565,9 +425,11 @@ class FlexibleArm:
         q, dq = self._check_q(q), self._check_q(dq, "dq")
         tau = check_array(tau, "tau", _OWNER, shape=(self.n_links,))
         if backend == "compiled":
-            ws = kernels.make_workspace(self.n_dof)
+            from . import dynamics  # Numba is loaded on first use
+
+            ws = dynamics.make_workspace(self.n_dof)
             ddq = np.empty(self.n_dof)
-            kernels.forward_dynamics(
+            dynamics.forward_dynamics(
                 np.ascontiguousarray(q, dtype=float),
                 np.ascontiguousarray(dq, dtype=float),
                 np.ascontiguousarray(tau, dtype=float),
@@ -620,6 +482,8 @@ class FlexibleArm:
         M, K = M[np.ix_(keep, keep)], K[np.ix_(keep, keep)]
         if M.size == 0:
             return np.zeros(0)
+        import scipy.linalg  # loaded on first use: import flexarm stays light
+
         lam = scipy.linalg.eigh(K, M, eigvals_only=True)
         if joints == "free":
             lam = lam[self.n_links :]  # the rigid-body modes (zero eigenvalues)
@@ -653,28 +517,19 @@ class FlexibleArm:
                 f"Got {distance} instead."
             )
         q = self._check_batch_q(q)
-        qb = np.atleast_2d(q)
-        a = self.arrays
-        pos = np.zeros((qb.shape[0], 2))
-        alpha = np.zeros(qb.shape[0])
-        for i in range(link + 1):
-            s = self.modal_slice(i)
-            alpha = alpha + qb[:, i]
-            if i < link:
-                x, w = self.links[i].length, qb[:, s] @ a.tip_deflection[s]
-            else:
-                x = distance
-                phi = self.modes[i].shape(distance)[:, 0]
-                w = qb[:, s] @ phi
-            c, sn = np.cos(alpha), np.sin(alpha)
-            pos += np.column_stack([x * c - w * sn, x * sn + w * c])
-            alpha = alpha + qb[:, s] @ a.tip_slope[s]
+        phi = self.modes[link].shape(distance)[:, 0]
+        pos = deflected_point(self.arrays, phi, np.atleast_2d(q), link, distance)
         return pos[0] if q.ndim == 1 else pos
 
     def tip_position(self, q: ArrayLike) -> NDArray[np.float64]:
         """End-effector position with deflection, shape ``(2,)`` or ``(m, 2)``, m."""
         last = self.n_links - 1
         return self.point_position(q, last, self.links[last].length)
+
+    @property
+    def link_lengths(self) -> NDArray[np.float64]:
+        """Link lengths, m, shape ``(n_links,)``."""
+        return np.array([lk.length for lk in self.links], dtype=float)
 
     def _check_theta(self, theta: ArrayLike) -> NDArray[np.float64]:
         arr = check_array(theta, "theta", _OWNER)
@@ -698,21 +553,12 @@ class FlexibleArm:
         ndarray, shape (2,) or (m, 2)
             ``x = sum L_i cos(theta_1 + ... + theta_i)``, likewise ``y``; m.
         """
-        theta = self._check_theta(theta)
-        lengths = np.array([lk.length for lk in self.links])
-        phi = np.cumsum(theta, axis=-1)
-        return np.stack([np.cos(phi) @ lengths, np.sin(phi) @ lengths], axis=-1)
+        return rigid_point(self.link_lengths, self._check_theta(theta))[0]
 
     def jacobian(self, theta: ArrayLike) -> NDArray[np.float64]:
         """Rigid-link Jacobian ``d(x, y)/d theta``, shape ``(2, n_links)`` or
         ``(m, 2, n_links)``, m/rad."""
-        theta = self._check_theta(theta)
-        lengths = np.array([lk.length for lk in self.links])
-        phi = np.cumsum(theta, axis=-1)
-        # column k: sum over i >= k of L_i (-sin phi_i, cos phi_i)
-        cx = np.flip(np.cumsum(np.flip(-lengths * np.sin(phi), -1), -1), -1)
-        cy = np.flip(np.cumsum(np.flip(lengths * np.cos(phi), -1), -1), -1)
-        return np.stack([cx, cy], axis=-2)
+        return rigid_jacobian(self.link_lengths, self._check_theta(theta))
 
     def inverse_kinematics(
         self, position: ArrayLike, elbow: str = "positive"
@@ -748,21 +594,4 @@ class FlexibleArm:
                 f"Got shape {p.shape} instead."
             )
         l1, l2 = self.links[0].length, self.links[1].length
-        x, y = p[..., 0], p[..., 1]
-        r2 = x**2 + y**2
-        c2 = (r2 - l1**2 - l2**2) / (2 * l1 * l2)
-        tol = 1e-12
-        bad = (c2 > 1 + tol) | (c2 < -1 - tol)
-        if np.any(bad):
-            r = np.sqrt(np.atleast_1d(r2)[np.atleast_1d(bad)][0])
-            raise InvalidValueError(
-                f"The 'position' parameter of {_OWNER} must be reachable, at a distance in "
-                f"[{abs(l1 - l2)}, {l1 + l2}] m from the base. Got a target at {r} m "
-                f"({int(np.sum(bad))} unreachable)."
-            )
-        c2 = np.clip(c2, -1.0, 1.0)
-        s2 = np.sqrt(1.0 - c2**2) * (1.0 if elbow == "positive" else -1.0)
-        t2 = np.arctan2(s2, c2)
-        t1 = np.arctan2(y, x) - np.arctan2(l2 * s2, l1 + l2 * c2)
-        t1 = (t1 + math.pi) % (2 * math.pi) - math.pi
-        return np.stack([t1, t2], axis=-1)
+        return two_link_inverse_kinematics(l1, l2, p, elbow, _OWNER)

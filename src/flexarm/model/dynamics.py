@@ -21,15 +21,38 @@ rigid joints) has the same computation written out in scalars.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any, NamedTuple, TypeVar
-
 import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
+from .._compile import njit_runtime_free
+from .arrays import (
+    HUB_MASS,
+    INERTIA,
+    J_A1,
+    J_A2,
+    J_ASW,
+    J_COUPLED,
+    J_DAMPING,
+    J_FRICTION_ON_MOTOR,
+    J_G1,
+    J_HAS_FRICTION,
+    J_INERTIA,
+    J_KSW,
+    LEN,
+    MASS,
+    STATIC,
+    ArmArrays,
+    Workspace,
+    make_workspace,
+)
+from .dynamics_two_links import (
+    accelerations_two_links_one_mode,
+    forward_dynamics_two_links_one_mode,
+    is_two_links_one_mode,
+)
+
 __all__ = [
-    "RUNTIME_FREE",
     "ArmArrays",
     "Workspace",
     "accelerations_two_links_one_mode",
@@ -41,124 +64,10 @@ __all__ = [
     "local_order",
     "make_workspace",
     "mass_and_bias",
-    "njit_runtime_free",
     "point_kinematics",
 ]
 
 F64 = NDArray[np.float64]
-
-
-def _runtime_free_options() -> dict[str, bool]:
-    """Numba options that compile a function without its reference-counting
-    runtime (NRT), for hot functions that allocate nothing.
-
-    Array arguments are then passed without atomic incref/decref calls, which
-    cost the dynamics kernel ~40 % of its time. ``_nrt`` is a Numba target
-    option of long standing but not a documented one, so it is used only where
-    this Numba version lists it.
-    """
-    from numba.core import cpu
-
-    return {"_nrt": False} if hasattr(cpu.CPUTargetOptions, "_nrt") else {}
-
-
-RUNTIME_FREE = _runtime_free_options()
-
-
-_Fn = TypeVar("_Fn", bound=Callable[..., Any])
-
-
-def njit_runtime_free(**options: Any) -> Callable[[_Fn], _Fn]:
-    """``numba.njit(**options)`` compiled without the refcount runtime where
-    this Numba supports it (for hot functions that allocate nothing)."""
-    decorator: Callable[[_Fn], _Fn] = nb.njit(**options, **RUNTIME_FREE)  # type: ignore[call-overload]
-    return decorator
-
-
-# Columns of ArmArrays.link
-LEN, MASS, STATIC, INERTIA, HUB_MASS = 0, 1, 2, 3, 4
-N_LINK_COLUMNS = 5
-# Columns of ArmArrays.joint
-J_A1, J_A2, J_KSW, J_ASW, J_INERTIA, J_DAMPING, J_COUPLED = 0, 1, 2, 3, 4, 5, 6
-J_HAS_FRICTION, J_FRICTION_ON_MOTOR, J_G1 = 7, 8, 9
-N_JOINT_COLUMNS = 15
-
-
-class ArmArrays(NamedTuple):
-    """The arm packed as plain arrays for the compiled kernels.
-
-    Attributes
-    ----------
-    mode_start : int64 array, shape (n_links + 1,)
-        Index in ``q`` of link ``i``'s first modal coordinate; link ``i`` owns
-        ``q[mode_start[i]:mode_start[i + 1]]``.
-    link : float array, shape (n_links, 5)
-        Per link: length (m), mass ``rho L`` (kg), static moment ``rho L**2 / 2``
-        (kg m), inertia about the joint ``rho L**3 / 3 + hub_inertia`` (kg m**2),
-        hub mass at the joint (kg).
-    mass_integral, moment_integral, tip_deflection, tip_slope : float arrays, shape (n_dof,)
-        ``int rho phi``, ``int rho x phi``, ``phi(L)``, ``phi'(L)`` at each modal
-        coordinate's index in ``q`` (zero at joint indices).
-    modal_mass : float array, shape (n_dof, n_dof)
-        ``int rho phi_j phi_k`` within each link's block, zero elsewhere.
-    stiffness, damping : float arrays, shape (n_dof,)
-        Diagonal of the stiffness (N m) and damping (N m s) matrices.
-    payload : float array, shape (2,)
-        Payload mass (kg) and rotary inertia (kg m**2) at the last link's tip.
-    joint : float array, shape (n_joints, 15)
-        Flexible joints (``n_joints`` is 0 for rigid joints or ``n_links``), one
-        row each: ``a1, a2, ksw, asw`` of the spring law (a linear joint is
-        ``k, 0, 0, 0``), reflected motor inertia ``J_m``, motor viscous damping,
-        rotor coupling flag (1: the rotor turns with its carrier link), friction
-        flag, friction side (0: link, 1: motor), Makkar ``g1..g6``. The motor
-        angle of joint ``i`` is ``q[mode_start[-1] + i]``.
-    """
-
-    mode_start: NDArray[np.int64]
-    link: F64
-    mass_integral: F64
-    moment_integral: F64
-    tip_deflection: F64
-    tip_slope: F64
-    modal_mass: F64
-    stiffness: F64
-    damping: F64
-    payload: F64
-    joint: F64
-
-
-class Workspace(NamedTuple):
-    """Scratch arrays for one thread of kernel calls (``n = n_dof``).
-
-    ``mass`` and ``bias`` hold :func:`mass_and_bias`'s results in the order of
-    ``q``; the other arrays are scratch of the solver, which works in the
-    link-major order of :func:`local_order`.
-    """
-
-    mass: F64  # (n, n) M(q), order of q
-    bias: F64  # (n,) C(q, dq) dq, order of q
-    jac: F64  # (2, n) base velocity Jacobian of the current link, link frame, local order
-    angle: F64  # (n,) gradient of the current link's absolute angle, local order
-    rhs: F64  # (n,) generalised forces, order of q
-    rows: F64  # (3, n) rows of the body inertia times the body Jacobian, local order
-    lmass: F64  # (n, n) lower triangle of M, then its LDL' factor, local order
-    lbias: F64  # (n,) C(q, dq) dq, then the right-hand side and solution, local order
-    inv_diag: F64  # (n,) reciprocal pivots of the LDL' factor
-
-
-def make_workspace(n_dof: int) -> Workspace:
-    """Allocate the scratch arrays for an arm with ``n_dof`` coordinates."""
-    return Workspace(
-        np.zeros((n_dof, n_dof)),
-        np.zeros(n_dof),
-        np.zeros((2, n_dof)),
-        np.zeros(n_dof),
-        np.zeros(n_dof),
-        np.zeros((3, n_dof)),
-        np.zeros((n_dof, n_dof)),
-        np.zeros(n_dof),
-        np.zeros(n_dof),
-    )
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -470,183 +379,6 @@ def forward_dynamics_general(
             ddq[g] = y[s + 1 + g - ms[i]]
     for r in range(ms[n_links], n):
         ddq[r] = y[r]
-
-
-@nb.njit(cache=True, nogil=True, inline="always")
-def is_two_links_one_mode(model: ArmArrays) -> bool:  # pragma: no cover - compiled
-    """Whether :func:`forward_dynamics_two_links_one_mode` applies: two links with
-    one mode each (``q = (theta1, theta2, delta1, delta2)``) and rigid joints."""
-    ms = model.mode_start
-    return bool(
-        model.joint.shape[0] == 0 and ms.shape[0] == 3 and ms[0] == 2 and ms[1] == 3 and ms[2] == 4
-    )
-
-
-@nb.njit(cache=True, nogil=True, inline="always")
-def accelerations_two_links_one_mode(
-    a1: float,
-    a2: float,
-    d1: float,
-    d2: float,
-    da1: float,
-    da2: float,
-    dd1: float,
-    dd2: float,
-    tau1: float,
-    tau2: float,
-    model: ArmArrays,
-) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
-    """:func:`forward_dynamics` of a two-link arm with one mode per link and rigid
-    joints (the paper's structure), in scalars.
-
-    This is :func:`_assemble_local` written out for that structure, in the same
-    local order ``(theta1, delta1, theta2, delta2)``, and a 2 x 2 block solve
-    in place of :func:`_ldlt_solve`: every intermediate stays in a register,
-    there is no loop, and one division is on the critical path. Hub mass,
-    payload and any mode shape (the modal integrals) are covered;
-    :func:`forward_dynamics` falls back to the general kernel for other
-    structures.
-
-    Parameters
-    ----------
-    a1, a2, d1, d2 : float
-        ``q = (theta1, theta2, delta1, delta2)``.
-    da1, da2, dd1, dd2 : float
-        ``dq``, in the same order.
-    tau1, tau2 : float
-        Joint torques, N m.
-    model : ArmArrays
-        Must satisfy :func:`is_two_links_one_mode`.
-
-    Returns
-    -------
-    tuple of 4 float
-        ``ddq``, in the order of ``q``.
-    """
-    lk = model.link
-    v, w = model.mass_integral, model.moment_integral
-    tdef, tslope, md = model.tip_deflection, model.tip_slope, model.modal_mass
-    v0, v1, w0, w1 = v[2], v[3], w[2], w[3]
-    t0, t1, g0, g1 = tdef[2], tdef[3], tslope[2], tslope[3]
-    md0, md1 = md[2, 2], md[3, 3]
-    # ---- link 0: A = (1, 0, 0, 0), U = 0, no velocity forces at its joint
-    ad = da1
-    ad2 = ad * ad
-    vd = v0 * d1
-    e = t0 * d1
-    m00 = lk[0, INERTIA] + d1 * md0 * d1
-    m10 = w0
-    m11 = md0
-    h0 = 2.0 * ad * (d1 * md0 * dd1)
-    h1 = -ad2 * md0 * d1
-    # its tip, in its frame: U columns (theta1, delta1), A = (1, g0)
-    u00, u10 = -e, lk[0, LEN]
-    u11 = t0
-    bx = -ad2 * lk[0, LEN] - 2.0 * ad * (t0 * dd1)
-    by = -ad2 * e
-    # ---- frame change to link 1: gamma = theta2 + tip slope of link 0
-    gamma = a2 + g0 * d1
-    cg, sg = np.cos(gamma), np.sin(gamma)
-    u00, u10 = cg * u00 + sg * u10, -sg * u00 + cg * u10
-    u01, u11 = sg * u11, cg * u11
-    bx, by = cg * bx + sg * by, -sg * bx + cg * by
-    mh = lk[1, HUB_MASS]
-    if mh != 0.0:
-        h0 += mh * (u00 * bx + u10 * by)
-        h1 += mh * (u01 * bx + u11 * by)
-        m00 += mh * (u00 * u00 + u10 * u10)
-        m10 += mh * (u01 * u00 + u11 * u10)
-        m11 += mh * (u01 * u01 + u11 * u11)
-    ad += g0 * dd1 + da2
-    ad2 = ad * ad
-    # ---- link 1: A = (1, g0, 1, 0), U column theta2 = 0
-    mass, cx = lk[1, MASS], lk[1, STATIC]
-    vd = v1 * d2
-    e = t1 * d2
-    ia = lk[1, INERTIA] + d2 * md1 * d2
-    p00, p10, p20 = mass * u00 - vd, mass * u10 + cx, -vd * u00 + cx * u10 + ia
-    p01, p11 = mass * u01 - vd * g0, mass * u11 + cx * g0
-    p21 = -vd * u01 + cx * u11 + ia * g0
-    m00 += u00 * p00 + u10 * p10 + p20
-    m10 += u01 * p00 + u11 * p10 + g0 * p20
-    m11 += u01 * p01 + u11 * p11 + g0 * p21
-    m20 = p20
-    m21 = p21
-    m22 = ia
-    m30 = v1 * u10 + w1
-    m31 = v1 * u11 + w1 * g0
-    m32 = w1
-    m33 = md1
-    h3 = v1 * by - ad2 * md1 * d2
-    beta_ux = mass * bx - ad2 * cx - 2.0 * ad * (v1 * dd2)
-    beta_uy = mass * by - ad2 * vd
-    beta_al = -bx * vd + 2.0 * ad * (d2 * md1 * dd2) + cx * by
-    h0 += u00 * beta_ux + u10 * beta_uy + beta_al
-    h1 += u01 * beta_ux + u11 * beta_uy + g0 * beta_al
-    h2 = beta_al
-    # ---- payload at the tip of link 1
-    mp, jp = model.payload[0], model.payload[1]
-    if mp != 0.0 or jp != 0.0:
-        L1 = lk[1, LEN]
-        u00, u10 = u00 - e, u10 + L1
-        u01, u11 = u01 - e * g0, u11 + L1 * g0
-        u02, u12 = -e, L1
-        u13 = t1
-        bx += -ad2 * L1 - 2.0 * ad * (t1 * dd2)
-        by += -ad2 * e
-        h0 += mp * (u00 * bx + u10 * by)
-        h1 += mp * (u01 * bx + u11 * by)
-        h2 += mp * (u02 * bx + u12 * by)
-        h3 += mp * (u13 * by)
-        m00 += mp * (u00 * u00 + u10 * u10) + jp
-        m10 += mp * (u01 * u00 + u11 * u10) + jp * g0
-        m11 += mp * (u01 * u01 + u11 * u11) + jp * g0 * g0
-        m20 += mp * (u02 * u00 + u12 * u10) + jp
-        m21 += mp * (u02 * u01 + u12 * u11) + jp * g0
-        m22 += mp * (u02 * u02 + u12 * u12) + jp
-        m30 += mp * (u13 * u10) + jp * g1
-        m31 += mp * (u13 * u11) + jp * g0 * g1
-        m32 += mp * (u13 * u12) + jp * g1
-        m33 += mp * (u13 * u13) + jp * g1 * g1
-    # ---- right-hand side, local order (theta1, delta1, theta2, delta2)
-    k, c = model.stiffness, model.damping
-    y0 = tau1 - k[0] * a1 - c[0] * da1 - h0
-    y1 = -k[2] * d1 - c[2] * dd1 - h1
-    y2 = tau2 - k[1] * a2 - c[1] * da2 - h2
-    y3 = -k[3] * d2 - c[3] * dd2 - h3
-    # ---- Block elimination. C = M[(theta2, delta2)] depends on delta2 only, so its
-    # inverse is not on the path from gamma to ddq; the Schur complement
-    # S = A - B C^-1 B' of A = M[(theta1, delta1)] (B = M[(theta1, delta1),
-    # (theta2, delta2)]) then costs one division there instead of four.
-    ic = 1.0 / (m22 * m33 - m32 * m32)
-    c22, c32, c33 = m33 * ic, -m32 * ic, m22 * ic  # C^-1
-    k00 = m20 * c22 + m30 * c32  # B C^-1
-    k01 = m20 * c32 + m30 * c33
-    k10 = m21 * c22 + m31 * c32
-    k11 = m21 * c32 + m31 * c33
-    s00 = m00 - (k00 * m20 + k01 * m30)
-    s10 = m10 - (k10 * m20 + k11 * m30)
-    s11 = m11 - (k10 * m21 + k11 * m31)
-    r0 = y0 - (k00 * y2 + k01 * y3)
-    r1 = y1 - (k10 * y2 + k11 * y3)
-    i_s = 1.0 / (s00 * s11 - s10 * s10)
-    x0 = (s11 * r0 - s10 * r1) * i_s
-    x1 = (s00 * r1 - s10 * r0) * i_s
-    e2 = y2 - (m20 * x0 + m21 * x1)
-    e3 = y3 - (m30 * x0 + m31 * x1)
-    x2 = c22 * e2 + c32 * e3
-    x3 = c32 * e2 + c33 * e3
-    return x0, x2, x1, x3
-
-
-@nb.njit(cache=True, nogil=True, inline="always")
-def forward_dynamics_two_links_one_mode(
-    q: F64, dq: F64, tau: F64, model: ArmArrays, ddq: F64
-) -> None:  # pragma: no cover - compiled
-    """:func:`accelerations_two_links_one_mode` on arrays: ``ddq`` from ``q, dq, tau``."""
-    ddq[0], ddq[1], ddq[2], ddq[3] = accelerations_two_links_one_mode(
-        q[0], q[1], q[2], q[3], dq[0], dq[1], dq[2], dq[3], tau[0], tau[1], model
-    )
 
 
 @nb.njit(cache=True, nogil=True, inline="always")

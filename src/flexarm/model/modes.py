@@ -59,7 +59,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import brentq
 
 from .._validation import (
     check_array,
@@ -189,6 +188,7 @@ def _collect_roots(
     grid: NDArray[np.float64], mu: float, jr: float, roots: list[float], n: int
 ) -> None:
     """Append the roots bracketed by sign changes of the scaled equation on ``grid``."""
+    from scipy.optimize import brentq  # loaded on first use: import flexarm stays light
 
     def g(x: float) -> float:
         return float(frequency_function(x, mu, jr))

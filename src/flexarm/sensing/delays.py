@@ -78,7 +78,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import expm
 
 from .._validation import check_array, check_int, check_option, check_real, validate_real_fields
 from ..errors import InvalidTypeError, InvalidValueError
@@ -269,6 +268,8 @@ def discretize(
     big = np.zeros((n + m, n + m))
     big[:n, :n] = a
     big[:n, n:] = b
+    from scipy.linalg import expm  # loaded on first use
+
     e = expm(big * h)
     return e[:n, :n].copy(), e[:n, n:].copy(), c.copy(), dd.copy()
 

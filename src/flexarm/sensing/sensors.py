@@ -24,13 +24,14 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Any
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import check_int, check_real, validate_real_fields
 from ..errors import InvalidTypeError, InvalidValueError
+from ..model.plant import Plant
 
 __all__ = ["JointSensor", "PointSensor", "Sensor", "TipSensor", "check_sensor", "parse_sensor"]
 
@@ -62,11 +63,11 @@ class JointSensor:
     def __post_init__(self) -> None:
         validate_real_fields(self, "JointSensor", nonnegative=_NOISE_FIELDS)
 
-    def resolve(self, arm: Any) -> tuple[int, float, NDArray[np.float64]]:
+    def resolve(self, arm: Plant) -> tuple[int, float, NDArray[np.float64]]:
         """``(link, distance, mode shapes at the point)``; link -1 means collocated."""
         return -1, 0.0, np.zeros(0)
 
-    def describe(self, arm: Any) -> str:
+    def describe(self, arm: Plant) -> str:
         return "joint"
 
 
@@ -98,13 +99,13 @@ class PointSensor:
         object.__setattr__(self, "link", check_int(self.link, "link", "PointSensor", minimum=0))
         validate_real_fields(self, "PointSensor", nonnegative=("distance", *_NOISE_FIELDS))
 
-    def resolve(self, arm: Any) -> tuple[int, float, NDArray[np.float64]]:
+    def resolve(self, arm: Plant) -> tuple[int, float, NDArray[np.float64]]:
         if self.link >= arm.n_links:
             raise InvalidValueError(
                 f"The 'link' parameter of PointSensor must be < {arm.n_links} (0-based). "
                 f"Got {self.link} instead."
             )
-        length = arm.links[self.link].length
+        length = float(arm.link_lengths[self.link])
         if self.distance > length:
             raise InvalidValueError(
                 f"The 'distance' parameter of PointSensor must be <= {length} m (link "
@@ -113,7 +114,7 @@ class PointSensor:
         phi = np.ascontiguousarray(arm.modes[self.link].shape(self.distance)[:, 0])
         return self.link, self.distance, phi
 
-    def describe(self, arm: Any) -> str:
+    def describe(self, arm: Plant) -> str:
         return f"point:{self.link}:{self.distance:g}"
 
 
@@ -131,35 +132,57 @@ class TipSensor:
     def __post_init__(self) -> None:
         validate_real_fields(self, "TipSensor", nonnegative=_NOISE_FIELDS)
 
-    def at(self, arm: Any) -> PointSensor:
+    def at(self, arm: Plant) -> PointSensor:
         last = arm.n_links - 1
         return PointSensor(
             last,
-            arm.links[last].length,
+            float(arm.link_lengths[last]),
             self.noise_std,
             self.rate_noise_std,
             self.quantization,
             self.rate_quantization,
         )
 
-    def resolve(self, arm: Any) -> tuple[int, float, NDArray[np.float64]]:
+    def resolve(self, arm: Plant) -> tuple[int, float, NDArray[np.float64]]:
         return self.at(arm).resolve(arm)
 
-    def describe(self, arm: Any) -> str:
+    def describe(self, arm: Plant) -> str:
         return "tip"
 
 
-Sensor = JointSensor | PointSensor | TipSensor
+@runtime_checkable
+class Sensor(Protocol):
+    """What the simulator and the linear analysis need of a sensor.
+
+    ``resolve(arm)`` gives ``(link, distance, phi)``: the sensed point's link
+    (-1 for the joint encoders), its distance along the link (m) and the link's
+    mode shapes there; the noise and quantisation fields act on the sensed
+    channels (positions in rad or m, rates in rad/s or m/s).
+    """
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def noise_std(self) -> float: ...
+    @property
+    def rate_noise_std(self) -> float: ...
+    @property
+    def quantization(self) -> float: ...
+    @property
+    def rate_quantization(self) -> float: ...
+
+    def resolve(self, arm: Plant) -> tuple[int, float, NDArray[np.float64]]: ...
+    def describe(self, arm: Plant) -> str: ...
 
 
-def check_sensor(sensor: Any, owner: str) -> Sensor:
+def check_sensor(sensor: object, owner: str) -> Sensor:
     """``sensor``, or :class:`JointSensor` () for ``None``; a TypeError naming ``owner`` else."""
     if sensor is None:
         return JointSensor()
-    if not isinstance(sensor, JointSensor | PointSensor | TipSensor):
+    if not isinstance(sensor, Sensor):
         raise InvalidTypeError(
-            f"The 'sensor' parameter of {owner} must be a JointSensor, PointSensor or "
-            f"TipSensor. Got {type(sensor).__name__} instead."
+            f"The 'sensor' parameter of {owner} must be a sensor (JointSensor, PointSensor, "
+            f"TipSensor or alike). Got {type(sensor).__name__} instead."
         )
     return sensor
 

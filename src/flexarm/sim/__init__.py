@@ -1,3 +1,48 @@
-"""sim"""
+"""The simulator: closed loop and open loop, results, metrics, scenario files.
 
-__all__: list[str] = []
+* :func:`simulate` — a controller tracking a trajectory through a sensor
+  (:mod:`~flexarm.sim.closed_loop`; the reference pipeline in
+  :mod:`~flexarm.sim.references`, the compiled loop in :mod:`~flexarm.sim.loop`);
+* :func:`simulate_open_loop` — the plant driven by joint torques
+  (:mod:`~flexarm.sim.open_loop`);
+* :class:`SimulationResult` — time series, metrics, plots, files (:mod:`~flexarm.sim.results`);
+* :mod:`~flexarm.sim.scenario` — runs described by TOML files.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .._lazy import attach
+
+_SUBMODULES = (
+    "driver",
+    "integrator",
+    "loop",
+    "metrics",
+    "open_loop",
+    "references",
+    "results",
+    "scenario",
+    "closed_loop",
+)
+_NAMES = {
+    "Scenario": "scenario",
+    "SimulationError": "results",
+    "SimulationResult": "results",
+    "joint_reference": "references",
+    "load_scenario": "scenario",
+    "simulate": "closed_loop",
+    "simulate_open_loop": "open_loop",
+}
+
+__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
+
+if TYPE_CHECKING:  # what type checkers see; nothing is imported at run time
+    from .closed_loop import simulate as simulate
+    from .open_loop import simulate_open_loop as simulate_open_loop
+    from .references import joint_reference as joint_reference
+    from .results import SimulationError as SimulationError
+    from .results import SimulationResult as SimulationResult
+    from .scenario import Scenario as Scenario
+    from .scenario import load_scenario as load_scenario

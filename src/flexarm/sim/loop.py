@@ -4,46 +4,60 @@ One Numba function runs a whole simulation (or a chunk of one) without
 returning to Python: at every control instant ``t_k = k dt`` it forms the
 measurement (sensor, delay, noise, quantisation), calls the controller through
 its C function pointer, saturates and holds the torque, then integrates the
-plant over ``[t_k, t_k + dt]`` with ``substeps`` fixed RK4 steps. Delays act at
-substep resolution: the exact delay is a ring buffer of the sensed signal
-(delay rounded to whole substeps), the Padé delay a discrete state-space
-filter discretised exactly over one substep (zero-order hold on its input).
+plant over ``[t_k, t_k + dt]`` with ``substeps`` fixed RK4 steps
+(:mod:`flexarm.sim.integrator`). Delays act at substep resolution: the exact
+delay is a ring buffer of the sensed signal (delay rounded to whole substeps),
+the Padé delay a discrete state-space filter discretised exactly over one
+substep (zero-order hold on its input).
 
-Everything is plain arrays; :func:`flexarm.sim.simulate.simulate` prepares them.
+Everything is plain arrays, built by one factory each (:func:`sensor_arrays`,
+:func:`loop_state`), by keyword; :func:`flexarm.simulate` prepares
+them. The measurement and reference layouts are those of
+:mod:`flexarm.control.signals`.
 """
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
+from numba.core.ccallback import CFunc
 from numpy.typing import NDArray
 
-from ..model.dynamics import (
-    LEN,
-    ArmArrays,
-    Workspace,
-    accelerations_two_links_one_mode,
-    forward_dynamics_general,
-    is_two_links_one_mode,
-    njit_runtime_free,
-    point_kinematics,
-)
+from .._compile import njit_runtime_free
+from ..control.signals import y_angles, y_modes, y_point, y_rates
+from ..errors import InvalidValueError
+from ..model.arrays import ArmArrays, Workspace, make_workspace
+from ..model.dynamics import is_two_links_one_mode, point_kinematics
+from .integrator import diverged, rk4_step, rk4_step_two_links_one_mode
 
-__all__ = ["LoopState", "SensorArrays", "run", "sense"]
+__all__ = [
+    "DIVERGED",
+    "OK",
+    "LoopState",
+    "SensorArrays",
+    "loop_state",
+    "prime_delay_line",
+    "run",
+    "sense",
+    "sensor_arrays",
+]
 
 F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
 
 OK, DIVERGED = 0, 1
 
 
 class SensorArrays(NamedTuple):
-    """The sensor as plain arrays.
+    """The sensor as plain arrays (build with :func:`sensor_arrays`).
 
     link: int64 (1,) — link of the sensed point, -1 for the joint encoders.
     distance: (1,) — distance of the point along its link, m.
     phi: (n_modes of link,) — mode shapes at the point.
+    levers: (n_links,) — lever lengths of the rigid kinematics that turn the
+        encoder angles into the sensed position (joint encoders), m.
     delay_steps: int64 (1,) — exact delay in substeps (0: none unless Padé).
     pade_ad, pade_bd, pade_cd, pade_dd: discrete Padé filter (order p): (p, p), (p,),
         (p,), (1,); p = 0 for no Padé.
@@ -51,10 +65,11 @@ class SensorArrays(NamedTuple):
     resolution: (n_channels,) quantisation steps (0: none).
     """
 
-    link: NDArray[np.int64]
+    link: I64
     distance: F64
     phi: F64
-    delay_steps: NDArray[np.int64]
+    levers: F64
+    delay_steps: I64
     pade_ad: F64
     pade_bd: F64
     pade_cd: F64
@@ -63,23 +78,116 @@ class SensorArrays(NamedTuple):
     resolution: F64
 
 
+def sensor_arrays(
+    *,
+    link: int,
+    distance: float,
+    phi: F64,
+    levers: F64,
+    delay_steps: int,
+    pade: tuple[F64, F64, F64, F64] | None,
+    noise: F64,
+    resolution: F64,
+) -> SensorArrays:
+    """The one way to build :class:`SensorArrays`: by keyword, shapes checked.
+
+    Parameters
+    ----------
+    link : int
+        Link of the sensed point (0-based), or -1 for the joint encoders.
+    distance : float
+        Distance of the point along its link, m (0 for the encoders).
+    phi : ndarray, shape (n_modes of link,)
+        Mode shapes at the point (empty for the encoders).
+    levers : ndarray, shape (n_links,)
+        Lever lengths of the rigid kinematics of the encoder angles, m.
+    delay_steps : int
+        Exact transport delay in substeps (>= 0).
+    pade : tuple of ndarray, optional
+        Discrete Padé filter ``(Ad (p, p), Bd (p,), Cd (p,), Dd (1,))``.
+    noise : ndarray, shape (n_rows, n_channels) or (0, n_channels)
+        Additive noise per control instant.
+    resolution : ndarray, shape (n_channels,)
+        Quantisation steps (0: none).
+    """
+    n_ch = 4 if link >= 0 else 2 * int(np.asarray(levers).shape[0])
+    ad, bd, cd, dd = (
+        pade if pade is not None else (np.zeros((0, 0)), np.zeros(0), np.zeros(0), np.zeros(1))
+    )
+    out = SensorArrays(
+        link=np.array([link], dtype=np.int64),
+        distance=np.array([distance], dtype=np.float64),
+        phi=np.ascontiguousarray(phi, dtype=np.float64),
+        levers=np.ascontiguousarray(levers, dtype=np.float64),
+        delay_steps=np.array([delay_steps], dtype=np.int64),
+        pade_ad=np.ascontiguousarray(ad, dtype=np.float64),
+        pade_bd=np.ascontiguousarray(np.ravel(bd), dtype=np.float64),
+        pade_cd=np.ascontiguousarray(np.ravel(cd), dtype=np.float64),
+        pade_dd=np.ascontiguousarray(np.ravel(dd), dtype=np.float64),
+        noise=np.ascontiguousarray(noise, dtype=np.float64),
+        resolution=np.ascontiguousarray(resolution, dtype=np.float64),
+    )
+    p = out.pade_ad.shape[0]
+    checks = {
+        "pade": out.pade_ad.shape == (p, p)
+        and out.pade_bd.shape == (p,)
+        and out.pade_cd.shape == (p,)
+        and out.pade_dd.shape == (1,),
+        "noise": out.noise.ndim == 2 and out.noise.shape[1] == n_ch,
+        "resolution": out.resolution.shape == (n_ch,),
+        "delay_steps": delay_steps >= 0,
+    }
+    for name, ok in checks.items():
+        if not ok:
+            raise InvalidValueError(
+                f"The '{name}' parameter of sensor_arrays does not fit a sensor with "
+                f"{n_ch} channels and a Padé filter of order {p}."
+            )
+    return out
+
+
 class LoopState(NamedTuple):
-    """Everything that carries over between chunks (updated in place)."""
+    """Everything that carries over between chunks (updated in place; build with
+    :func:`loop_state`)."""
 
     q: F64  # (n,)
     dq: F64  # (n,)
     tau: F64  # (N,) held torque
     ctrl_state: F64  # (s,)
     buffer: F64  # (delay_steps + 1, n_channels) ring of sensed signals
-    cursor: NDArray[np.int64]  # (1,) substeps integrated so far
+    cursor: I64  # (1,) substeps integrated so far
     pade_x: F64  # (n_channels, p) filter states
     scratch: F64  # (6, n) RK4 stages
     ws: Workspace  # dynamics scratch
     signals: F64  # (2 n_channels + n_y + max(p, 1),) signal scratch
 
-    @staticmethod
-    def signal_size(n_channels: int, n_y: int, order: int) -> int:
-        return 2 * n_channels + n_y + max(order, 1)
+
+def loop_state(
+    *,
+    q: F64,
+    dq: F64,
+    n_links: int,
+    controller_state: F64,
+    sensor: SensorArrays,
+    n_y: int,
+) -> LoopState:
+    """A fresh :class:`LoopState` for the initial ``q, dq`` (copied), a controller's
+    initial state (copied), the sensor's arrays and a measurement of ``n_y``."""
+    n = q.shape[0]
+    n_ch = sensor.resolution.shape[0]
+    order = sensor.pade_ad.shape[0]
+    return LoopState(
+        q=np.array(q, dtype=np.float64),
+        dq=np.array(dq, dtype=np.float64),
+        tau=np.zeros(n_links),
+        ctrl_state=np.array(controller_state, dtype=np.float64),
+        buffer=np.zeros((int(sensor.delay_steps[0]) + 1, n_ch)),
+        cursor=np.zeros(1, dtype=np.int64),
+        pade_x=np.zeros((n_ch, order)),
+        scratch=np.zeros((6, n)),
+        ws=make_workspace(n),
+        signals=np.zeros(2 * n_ch + n_y + max(order, 1)),
+    )
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -93,7 +201,8 @@ def _collocated(q: F64, dq: F64, model: ArmArrays, i: int, n_links: int) -> tupl
 
 @nb.njit(cache=True, nogil=True, inline="always")
 def sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> None:
-    """The raw (true, undelayed) sensed signal.
+    """The raw (true, undelayed) sensed signal: the encoder angles then rates, or
+    the point's position then velocity.
 
     Inlined where :func:`run` calls it (the model's and the sensor's arrays would
     otherwise be passed through a call at every control step).
@@ -109,129 +218,22 @@ def sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> 
         point_kinematics(q, dq, model, link, sensor.distance[0], sensor.phi, out)
 
 
-@nb.njit(cache=True, nogil=True, inline="always")
-def _diverged(q: F64, dq: F64, model: ArmArrays, max_deflection: F64) -> bool:
-    for r in range(q.shape[0]):
-        if not (np.isfinite(q[r]) and np.isfinite(dq[r])):
-            return True
-        if abs(dq[r]) > 1e12:
-            return True
-    ms = model.mode_start
-    for i in range(model.link.shape[0]):
-        e = 0.0
-        for r in range(ms[i], ms[i + 1]):
-            e += model.tip_deflection[r] * q[r]
-        if abs(e) > max_deflection[i]:
-            return True
-    return False
-
-
-_RK4_C = (0.0, 0.5, 0.5, 1.0)
-_RK4_W = (1.0, 2.0, 2.0, 1.0)
-
-
-@nb.njit(cache=True, nogil=True, inline="always")
-def _stage_state(q: F64, dq: F64, h: float, s: F64, stage: int) -> None:  # pragma: no cover
-    """The state of RK4 stage ``stage`` into ``s[0], s[1]`` (``qs, vs``), formed in
-    place from the previous stage's: ``qs = q + c vs`` before ``vs = dq + c acc``."""
-    qs, vs, acc = s[0], s[1], s[2]
-    if stage == 0:
-        for r in range(q.shape[0]):
-            qs[r] = q[r]
-            vs[r] = dq[r]
-    else:
-        c = _RK4_C[stage] * h
-        for r in range(q.shape[0]):
-            qs[r] = q[r] + c * vs[r]
-            vs[r] = dq[r] + c * acc[r]
-
-
-@nb.njit(cache=True, nogil=True, inline="always")
-def _stage_sum(s: F64, stage: int) -> None:  # pragma: no cover - compiled
-    """Add stage ``stage``'s rates ``s[1], s[2]`` to the weighted sums ``s[3], s[4]``
-    (the first stage starts them)."""
-    vs, acc, sum_v, sum_a = s[1], s[2], s[3], s[4]
-    if stage == 0:
-        for r in range(vs.shape[0]):
-            sum_v[r] = vs[r]
-            sum_a[r] = acc[r]
-    else:
-        w = _RK4_W[stage]
-        for r in range(vs.shape[0]):
-            sum_v[r] += w * vs[r]
-            sum_a[r] += w * acc[r]
-
-
-@nb.njit(cache=True, nogil=True, inline="always")
-def _rk4_update(q: F64, dq: F64, h: float, s: F64) -> None:  # pragma: no cover - compiled
-    c6 = h / 6.0
-    sum_v, sum_a = s[3], s[4]
-    for r in range(q.shape[0]):
-        q[r] += c6 * sum_v[r]
-        dq[r] += c6 * sum_a[r]
-
-
-@njit_runtime_free(cache=True, nogil=True)
-def _rk4(
-    q: F64, dq: F64, tau: F64, h: float, model: ArmArrays, ws: Workspace, s: F64
-) -> None:  # pragma: no cover - compiled
-    """One classical RK4 step of ``qdd = f(q, dq, tau)`` in place; ``s`` is (6, n) scratch.
-
-    The four stages run in a loop with a single call of the dynamics, so the
-    (inlined) kernel is compiled once. This is the general kernel;
-    :func:`_rk4_two_links_one_mode` is the same step for the paper's structure.
-    """
-    for stage in range(4):
-        _stage_state(q, dq, h, s, stage)
-        forward_dynamics_general(s[0], s[1], tau, model, ws, s[2])
-        _stage_sum(s, stage)
-    _rk4_update(q, dq, h, s)
-
-
-@nb.njit(cache=True, nogil=True, inline="always")
-def _rk4_two_links_one_mode(
-    q: F64, dq: F64, tau: F64, h: float, model: ArmArrays
-) -> None:  # pragma: no cover - compiled
-    """:func:`_rk4` for two links with one mode each and rigid joints, in scalars
-    (:func:`flexarm.model.dynamics.accelerations_two_links_one_mode`): the stage states
-    and sums stay in registers. Same operations in the same order as :func:`_rk4`.
-
-    Inlined into :func:`run`, so a step passes no arrays through a call; kept
-    apart from :func:`_rk4` (which :func:`run` calls) so that each kernel is
-    inlined into one function only, which keeps the first compilation short.
-    """
-    q0, q1, q2, q3 = q[0], q[1], q[2], q[3]
-    v0, v1, v2, v3 = dq[0], dq[1], dq[2], dq[3]
-    t0, t1 = tau[0], tau[1]
-    qs0, qs1, qs2, qs3 = q0, q1, q2, q3
-    vs0, vs1, vs2, vs3 = v0, v1, v2, v3
-    a0 = a1 = a2 = a3 = 0.0
-    sv0 = sv1 = sv2 = sv3 = 0.0
-    sa0 = sa1 = sa2 = sa3 = 0.0
-    for stage in range(4):
-        if stage > 0:
-            c = _RK4_C[stage] * h
-            qs0, qs1, qs2, qs3 = q0 + c * vs0, q1 + c * vs1, q2 + c * vs2, q3 + c * vs3
-            vs0, vs1, vs2, vs3 = v0 + c * a0, v1 + c * a1, v2 + c * a2, v3 + c * a3
-        a0, a1, a2, a3 = accelerations_two_links_one_mode(
-            qs0, qs1, qs2, qs3, vs0, vs1, vs2, vs3, t0, t1, model
-        )
-        if stage == 0:
-            sv0, sv1, sv2, sv3 = vs0, vs1, vs2, vs3
-            sa0, sa1, sa2, sa3 = a0, a1, a2, a3
-        else:
-            w = _RK4_W[stage]
-            sv0, sv1, sv2, sv3 = sv0 + w * vs0, sv1 + w * vs1, sv2 + w * vs2, sv3 + w * vs3
-            sa0, sa1, sa2, sa3 = sa0 + w * a0, sa1 + w * a1, sa2 + w * a2, sa3 + w * a3
-    c6 = h / 6.0
-    q[0], q[1], q[2], q[3] = q0 + c6 * sv0, q1 + c6 * sv1, q2 + c6 * sv2, q3 + c6 * sv3
-    dq[0], dq[1], dq[2], dq[3] = v0 + c6 * sa0, v1 + c6 * sa1, v2 + c6 * sa2, v3 + c6 * sa3
+def prime_delay_line(model: ArmArrays, sensor: SensorArrays, state: LoopState) -> None:
+    """Start the delay line at steady state on the initial sensed signal."""
+    raw = np.zeros(state.buffer.shape[1])
+    sense(state.q, state.dq, model, sensor, raw)
+    state.buffer[:] = raw
+    order = sensor.pade_ad.shape[0]
+    if order:
+        # discrete steady state: x = (I - Ad)^-1 Bd u
+        gain = np.linalg.solve(np.eye(order) - sensor.pade_ad, sensor.pade_bd)
+        state.pade_x[:] = np.outer(raw, gain)
 
 
 @njit_runtime_free(cache=True, nogil=True)
 def run(
     model: ArmArrays,
-    control: Any,  # FunctionType: see flexarm.control.controllers.CONTROL_SIGNATURE
+    control: CFunc,  # see flexarm.control.controllers.CONTROL_SIGNATURE
     params: F64,
     sensor: SensorArrays,
     reference: F64,
@@ -274,6 +276,8 @@ def run(
     has_noise = sensor.noise.shape[0] > 0
     joint_sensor = sensor.link[0] < 0
     two_links_one_mode = is_two_links_one_mode(model)
+    o_angle, o_rate = y_angles(n_links), y_rates(n_links)
+    o_point, o_modes = y_point(n_links), y_modes(n_links)
     for k in range(k0, k1):
         # ---- measure: the delayed sensed signal, then noise and quantisation
         sense(q, dq, model, sensor, raw)
@@ -302,7 +306,7 @@ def run(
                 v = np.round(v / res) * res
             delayed[c] = v
         if joint_sensor:
-            # rigid kinematics of the measured angles
+            # rigid kinematics (lever lengths of the sensor) of the measured angles
             px = 0.0
             py = 0.0
             vx = 0.0
@@ -310,28 +314,28 @@ def run(
             phi = 0.0
             phid = 0.0
             for i in range(n_links):
-                y[i] = delayed[i]
-                y[n_links + i] = delayed[n_links + i]
+                y[o_angle + i] = delayed[i]
+                y[o_rate + i] = delayed[n_links + i]
                 phi += delayed[i]
                 phid += delayed[n_links + i]
-                L = model.link[i, LEN]
-                px += L * np.cos(phi)
-                py += L * np.sin(phi)
-                vx -= L * np.sin(phi) * phid
-                vy += L * np.cos(phi) * phid
-            y[2 * n_links] = px
-            y[2 * n_links + 1] = py
-            y[2 * n_links + 2] = vx
-            y[2 * n_links + 3] = vy
+                lever = sensor.levers[i]
+                px += lever * np.cos(phi)
+                py += lever * np.sin(phi)
+                vx -= lever * np.sin(phi) * phid
+                vy += lever * np.cos(phi) * phid
+            y[o_point] = px
+            y[o_point + 1] = py
+            y[o_point + 2] = vx
+            y[o_point + 3] = vy
         else:
             for i in range(n_links):
                 a, r = _collocated(q, dq, model, i, n_links)
-                y[i] = a
-                y[n_links + i] = r
+                y[o_angle + i] = a
+                y[o_rate + i] = r
             for c in range(4):
-                y[2 * n_links + c] = delayed[c]
+                y[o_point + c] = delayed[c]
         for j in range(n_modes):
-            y[2 * n_links + 4 + j] = q[n_links + j]
+            y[o_modes + j] = q[n_links + j]
         # ---- record
         for r in range(n):
             out_q[k, r] = q[r]
@@ -377,15 +381,15 @@ def run(
                     for j in range(order):
                         state.pade_x[c, j] = x_new[j]
             if two_links_one_mode:
-                _rk4_two_links_one_mode(q, dq, tau, h, model)
+                rk4_step_two_links_one_mode(q, dq, tau, tau, tau, h, model)
             else:
-                _rk4(q, dq, tau, h, model, ws, state.scratch)
+                rk4_step(q, dq, tau, tau, tau, h, model, ws, state.scratch)
             state.cursor[0] += 1
             if n_buf > 1:
                 sense(q, dq, model, sensor, raw)
                 slot = state.cursor[0] % n_buf
                 for c in range(n_ch):
                     state.buffer[slot, c] = raw[c]
-            if _diverged(q, dq, model, max_deflection):
+            if diverged(q, dq, model, max_deflection):
                 return DIVERGED, k
     return OK, k1

@@ -1,21 +1,36 @@
-"""The result of a simulation: time series, metrics, persistence and plots."""
+"""The result of a simulation: time series, metrics, persistence and plots.
+
+:class:`SimulationResult` is what :func:`flexarm.simulate` (closed loop) and
+:func:`flexarm.simulate_open_loop` (driven by joint torques) both return;
+:func:`assemble_result` is the one place that turns a run's raw arrays into it,
+and :class:`SimulationError` carries the partial result of a run that diverged.
+"""
 
 from __future__ import annotations
 
 import json
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
-from .._io import atomic_path
-from ..errors import InvalidValueError
+from .._io import JSONValue, atomic_path, output_directory
+from ..errors import FlexarmError, InvalidValueError
+from ..model.arrays import ArmArrays
 from . import metrics as _m
 
-__all__ = ["SimulationResult"]
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+__all__ = ["RESULT_FILES", "SimulationError", "SimulationResult", "assemble_result"]
+
+RESULT_FILES = ("result.npz", "summary.json", "timeseries.csv", "tracking.png")
+"""What :meth:`SimulationResult.write` puts in a directory."""
 
 F64 = NDArray[np.float64]
 _ARRAYS = (
@@ -58,6 +73,10 @@ class SimulationResult:
         True end-effector position with deflection, m.
     info : dict
         Settings and run data (JSON-able).
+
+    A run driven open loop (:func:`flexarm.simulate_open_loop`) has no
+    reference and no measurement (``reference`` and ``measurement`` have no
+    columns) and its ``desired`` path is NaN, so its tracking metrics are NaN.
     """
 
     t: F64
@@ -72,7 +91,7 @@ class SimulationResult:
     tip_deflection_gains: F64
     mode_start: NDArray[np.int64]
     link_lengths: F64
-    info: dict[str, Any] = field(default_factory=dict)
+    info: dict[str, JSONValue] = field(default_factory=dict)
 
     # ----------------------------------------------------------- derived series
     @property
@@ -105,7 +124,9 @@ class SimulationResult:
         return np.linalg.norm(self.tip - self.rigid_tip, axis=1)  # type: ignore[no-any-return]
 
     # ------------------------------------------------------------------ metrics
-    def metrics(self, corner_window: float = 1.0, settle_tolerance: float = 0.01) -> dict[str, Any]:
+    def metrics(
+        self, corner_window: float = 1.0, settle_tolerance: float = 0.01
+    ) -> dict[str, float | list[float]]:
         """The standard metrics (:mod:`flexarm.sim.metrics`) as a JSON-able dict.
 
         Parameters
@@ -116,8 +137,8 @@ class SimulationResult:
             Error band for the settling time, m.
         """
         err = self.error
-        end = float(self.info.get("motion_end_s", self.t[-1]))
-        corners = self.info.get("corner_times_s", [])
+        end = _float(self.info.get("motion_end_s"), float(self.t[-1]))
+        corners = self.corner_times
         return {
             "rms_error_m": _m.rms_error(err),
             "max_error_m": _m.max_error(err),
@@ -127,8 +148,16 @@ class SimulationResult:
             "control_effort_N2m2s": _m.control_effort(self.t, self.tau),
             "max_torque_Nm": float(np.nanmax(np.abs(self.tau))) if self.tau.size else 0.0,
             "sim_time_s": float(self.t[-1]),
-            "wall_time_s": float(self.info.get("wall_time_s", float("nan"))),
+            "wall_time_s": _float(self.info.get("wall_time_s"), float("nan")),
         }
+
+    @property
+    def corner_times(self) -> list[float]:
+        """The trajectory's corner times, s (empty for an open-loop run)."""
+        corners = self.info.get("corner_times_s", [])
+        if not isinstance(corners, list):
+            return []
+        return [float(c) for c in corners if isinstance(c, int | float)]
 
     def truncated(self, rows: int) -> SimulationResult:
         """The first ``rows`` rows (used for the partial result of a diverged run)."""
@@ -153,22 +182,16 @@ class SimulationResult:
         names = list(self.coordinate_names)
         header = ["t", *names, *(f"d{n}" for n in names)]
         header += [f"tau{i + 1}" for i in range(self.n_links)]
-        header += ["x_desired", "y_desired", "x_ref", "y_ref", "x_tip", "y_tip", "error"]
-        values = np.column_stack(
-            [
-                self.t,
-                self.q,
-                self.dq,
-                self.tau,
-                self.desired,
-                self.reference[:, :2],
-                self.tip,
-                self.error,
-            ]
-        )
-        return header, values
+        header += ["x_desired", "y_desired"]
+        columns = [self.t, self.q, self.dq, self.tau, self.desired]
+        if self.reference.shape[1]:
+            header += ["x_ref", "y_ref"]
+            columns.append(self.reference[:, :2])
+        header += ["x_tip", "y_tip", "error"]
+        columns += [self.tip, self.error]
+        return header, np.column_stack(columns)
 
-    def to_pandas(self) -> Any:
+    def to_pandas(self) -> pd.DataFrame:
         """A ``pandas.DataFrame`` of :meth:`table` indexed by time (pandas is
         imported on demand)."""
         import pandas as pd
@@ -209,14 +232,45 @@ class SimulationResult:
             raise InvalidValueError(f"{path} is not a flexarm simulation result (format field).")
         return cls(**arrays, coordinate_names=list(meta["coordinate_names"]), info=meta["info"])
 
+    def write(self, directory: str | os.PathLike[str], summary: Mapping[str, JSONValue]) -> Path:
+        """Write :data:`RESULT_FILES` into ``directory`` (new, or empty) all at once:
+        ``result.npz`` (:meth:`save`), ``summary.json`` (``summary``),
+        ``timeseries.csv`` (:meth:`table`) and ``tracking.png`` (:meth:`plot`),
+        written beside it and renamed into place, so that an interrupted write
+        leaves nothing behind."""
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        out = Path(directory)
+        with output_directory(out) as tmp:
+            self.save(tmp / "result.npz")
+            (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+            header, table = self.table()
+            np.savetxt(tmp / "timeseries.csv", table, fmt="%.10g", delimiter=",",
+                       header=",".join(header), comments="")  # fmt: skip
+            fig = self.plot()
+            FigureCanvasAgg(fig)
+            fig.savefig(tmp / "tracking.png", dpi=100)
+        return out
+
     # ------------------------------------------------------------------ plots
-    def plot(self, fig: Any = None) -> Any:
+    def plot(self, fig: Figure | None = None) -> Figure:
         """Three panels: the XY path against the desired one, the error, the link
-        deflections. Returns the matplotlib figure (never blocks)."""
-        import matplotlib.pyplot as plt
+        deflections.
+
+        Parameters
+        ----------
+        fig : matplotlib.figure.Figure, optional
+            Drawn into (a new figure by default, not registered with pyplot).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            Never shown, never blocks.
+        """
+        from matplotlib.figure import Figure
 
         if fig is None:
-            fig = plt.figure(figsize=(10, 6.5), layout="constrained")
+            fig = Figure(figsize=(10, 6.5), layout="constrained")
         grid = fig.add_gridspec(2, 2)
         ax_xy = fig.add_subplot(grid[:, 0])
         ax_err = fig.add_subplot(grid[0, 1])
@@ -224,18 +278,113 @@ class SimulationResult:
         ax_xy.plot(self.desired[:, 0], self.desired[:, 1], "k--", lw=1, label="desired")
         ax_xy.plot(self.tip[:, 0], self.tip[:, 1], lw=1.2, label="end effector")
         ax_xy.set(
-            xlabel="x [m]",
-            ylabel="y [m]",
+            xlabel="x (m)",
+            ylabel="y (m)",
             aspect="equal",
             title=f"{self.info.get('controller', '')}, sensor {self.info.get('sensor', '')}",
         )
         ax_xy.legend(loc="best", fontsize="small")
         ax_err.plot(self.t, 1e3 * self.error, lw=1)
-        ax_err.set(ylabel="error [mm]")
-        for tc in self.info.get("corner_times_s", []):
+        ax_err.set(ylabel="error (mm)")
+        for tc in self.corner_times:
             ax_err.axvline(tc, color="0.8", lw=0.8, zorder=0)
         for i in range(self.n_links):
             ax_def.plot(self.t, 1e3 * self.link_deflections[:, i], lw=1, label=f"link {i + 1}")
-        ax_def.set(xlabel="t [s]", ylabel="tip deflection [mm]")
+        ax_def.set(xlabel="t (s)", ylabel="tip deflection (mm)")
         ax_def.legend(loc="best", fontsize="small")
         return fig
+
+
+def _float(value: JSONValue, default: float) -> float:
+    return float(value) if isinstance(value, int | float) else default
+
+
+class SimulationError(FlexarmError, RuntimeError):
+    """The simulated state diverged (non-finite, overflow or runaway deflection).
+
+    Attributes
+    ----------
+    time : float
+        Last control instant recorded, s.
+    state : ndarray, shape (2 n_dof,)
+        ``(q, dq)`` at that instant.
+    result : SimulationResult
+        The partial result up to ``time``.
+    """
+
+    def __init__(
+        self, message: str, time: float, state: NDArray[np.float64], result: SimulationResult
+    ):
+        super().__init__(message)
+        self.time = time
+        self.state = state
+        self.result = result
+
+
+class ResultArm(Protocol):
+    """What :func:`assemble_result` reads of the arm."""
+
+    @property
+    def arrays(self) -> ArmArrays: ...
+    @property
+    def link_lengths(self) -> F64: ...
+    @property
+    def coordinate_names(self) -> list[str]: ...
+
+    def tip_position(self, q: ArrayLike) -> F64: ...
+
+
+def assemble_result(
+    arm: ResultArm,
+    *,
+    t: F64,
+    q: F64,
+    dq: F64,
+    tau: F64,
+    measurement: F64,
+    reference: F64,
+    desired: F64,
+    diverged: bool,
+    last_row: int,
+    info: dict[str, JSONValue],
+) -> SimulationResult:
+    """The :class:`SimulationResult` of a run whose rows up to ``last_row`` were written.
+
+    Rows after ``last_row`` become NaN; the tip follows from ``q`` where the state
+    is finite; ``info["status"]`` is set. A run that ``diverged`` raises
+    :class:`SimulationError` with the partial result attached.
+    """
+    for series in (q, dq, tau, measurement):
+        series[last_row + 1 :] = np.nan
+    tip = np.full((t.shape[0], 2), np.nan)
+    reached = q[: last_row + 1]
+    done = np.all(np.isfinite(reached), axis=1)
+    tip[: last_row + 1][done] = arm.tip_position(reached[done])
+    info["status"] = "diverged" if diverged else "ok"
+    result = SimulationResult(
+        t=t,
+        q=q,
+        dq=dq,
+        tau=tau,
+        reference=reference,
+        desired=desired,
+        measurement=measurement,
+        tip=tip,
+        coordinate_names=list(arm.coordinate_names),
+        tip_deflection_gains=np.asarray(arm.arrays.tip_deflection),
+        mode_start=np.asarray(arm.arrays.mode_start),
+        link_lengths=np.asarray(arm.link_lengths, dtype=float),
+        info=info,
+    )
+    if diverged:
+        tk = float(t[last_row])
+        x = np.r_[q[last_row], dq[last_row]]
+        raise SimulationError(
+            f"the simulation diverged after t = {tk:.6g} s (state non-finite, overflowing "
+            f"or a tip deflection beyond max_deflection); last state q, dq = "
+            f"{np.array2string(x, precision=4, max_line_width=200)}",
+            tk,
+            x,
+            result.truncated(last_row + 1),
+        )
+    return result

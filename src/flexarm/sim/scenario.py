@@ -3,133 +3,32 @@
 :func:`load_scenario` reads a file, :meth:`Scenario.from_dict` builds the same
 from a mapping; both return a :class:`Scenario` holding the built library
 objects, and ``simulate(s.arm, **s.simulate_kwargs())`` runs it
-(:func:`flexarm.sim.simulate.simulate`). ``flexarm simulate --scenario FILE`` is the
-command-line front end; ``examples/paper_square.toml`` is a complete file.
-
-Schema
-------
-Every section and every key is optional; an empty file is the paper's arm
-tracking the default square with the paper's Jacobian-transpose PD gains and
-joint encoders. Keys are the parameters of the library class that each section
-builds, with the same names and SI units::
-
-    [arm]                     # FlexibleArm; default: the paper's arm
-    preset = "paper"          # two 4.5 m links (FlexibleArm.paper); or omit it and
-                              # give [[arm.links]] instead (not both)
-    n_modes = 1               # modes per link of the preset only
-    boundary = "clamped-free" # or "clamped-mass"
-    payload_mass = 0.0        # kg
-    payload_inertia = 0.0     # kg m^2
-    # also: mode_normalization, mode_amplitude, joint_friction, rotor_coupling
-
-    # [[arm.links]]           # one table per link, base outwards (Link)
-    # length = 4.5            # m            (required)
-    # flexural_rigidity = 1676.0   # N m^2   (required)
-    # linear_density = 0.335  # kg/m         (required)
-    # n_modes = 1, hub_mass = 0.0 (kg), hub_inertia = 0.0 (kg m^2), modal_damping = 0.0
-
-    # [arm.joints]            # the same joint at every link (default: rigid joints)
-    # kind = "linear"         # "rigid" | "linear" (LinearJoint.default()) |
-    #                         # "nonlinear" (NonlinearJoint.default(MakkarFriction.default()))
-    # stiffness, motor_inertia, motor_damping          (linear overrides)
-    # a1, a2, ksw, asw, motor_inertia, motor_damping   (nonlinear overrides)
-    # friction = true | false | { g1 = ..., ..., g6 = ... }
-    #   true: MakkarFriction.default(); a table overrides some of its g's;
-    #   default: false for "linear", true for "nonlinear"
-
-    [trajectory]              # the end-effector path
-    kind = "square"           # "square" | "circle" | "line" | "point-to-point" |
-                              # "waypoints"; the other keys are the parameters of
-                              # Square, Circle, Line, PointToPoint or Waypoints
-                              # (e.g. center = [5.0, 0.0], side = 4.0, time_per_side = 5.0)
-
-    [sensor]
-    kind = "joint"            # "joint" | "tip" | "point" (needs link, 0-based, and
-                              # distance, m from that link's joint)
-    # noise_std, rate_noise_std, quantization, rate_quantization
-    #   (rad and rad/s for "joint"; m and m/s for "tip" and "point")
-
-    [controller]
-    kind = "pd"               # "pd": the paper's gains JacobianTransposePD.from_arm(arm,
-                              #   zeta) (key: zeta = 0.707);
-                              # "jt-pd": JacobianTransposePD(kp, kd), N/m and N s/m,
-                              #   scalar, [kx, ky] or 2x2;
-                              # "joint-pd": JointPD(kp, kd), N m/rad and N m s/rad,
-                              #   scalar or one per link;
-                              # "fuzzy": the paper's gains (zeta) adapted by the
-                              #   paper's fuzzy system, FuzzyAdaptiveJTPD (keys:
-                              #   zeta = 0.707, ks = 1.0, law = "scaled" | "damping")
-
-    [delay]                   # transport delay of the sensed signal
-    delay = 0.0               # s, or "seed" / "dispersive" (below)
-    method = "exact"          # "exact" (sample buffer) | "pade"
-    order = 2                 # Pade order
-    reference = false         # delay the reference fed to the control law too
-
-    [shaper]                  # input shaper on the reference path
-    kind = "none"             # "none" | "zv" | "zvd" | "ei"
-    modes = "first"           # "first": the first clamped frequency of the first
-                              # link; "all": every link's first clamped frequency,
-                              # one shaper per link convolved (shapers.for_modes)
-    # damping = 0.0           # design damping ratio (default: each link's modal_damping)
-    # tolerance = 0.05        # "ei" only
-
-    [simulation]
-    # duration = 20.0         # s (default: the trajectory's duration)
-    dt = 2e-4                 # control period, s
-    substeps = 1              # RK4 steps per control period
-    # torque_limit = 100.0    # N m, scalar or one per joint (default: none)
-    # seed = 0                # sensor-noise seed (default: unseeded)
-    elbow = "positive"        # inverse-kinematics branch of the reference
-    # max_deflection = 4.5    # m (default: each link's length)
-
-``delay = "seed"`` or ``"dispersive"`` computes the wave-travel delay
-(:func:`flexarm.sensing.delays.travel_delay`) over the path length along the links
-from the base joint to the sensed point (:func:`sensor_path_length`: 0 for
-joint encoders, 9 m for the paper arm's tip, 5 m for ``point`` link 1 at
-0.5 m) at the seed's wave speed (:data:`flexarm.sensing.delays.SEED_WAVE_SPEED`) or at
-the dispersive bending group speed of the first link at its first clamped
-frequency.
-
-Errors
-------
-An unknown section or key, a missing required key or a value the library
-rejects raises :class:`ScenarioError` (a ``ValueError``) whose message starts
-with the source (the file name) and names the dotted key, e.g.
-``scenario.toml: unknown key 'trajectory.sidee'`` or ``scenario.toml:
-trajectory.side: The 'side' parameter of Square must be a real number. Got
-'big' instead.``
+(:func:`flexarm.simulate`). ``flexarm simulate --scenario FILE`` is the
+command-line front end; ``examples/paper_square.toml`` is a complete file. The
+schema, the reading of files and the errors are in
+:mod:`flexarm.sim.scenario_schema`.
 
 Examples
 --------
 >>> s = Scenario.from_dict({"trajectory": {"kind": "circle", "radius": 1.0}})
 >>> type(s.controller).__name__, s.trajectory.radius, s.simulation.duration
 ('JacobianTransposePD', 1.0, 10.0)
->>> Scenario.from_dict({"trajectory": {"sidee": 1.0}}, source="s.toml")  # doctest: +ELLIPSIS
-Traceback (most recent call last):
-...
-flexarm.sim.scenario.ScenarioError: s.toml: unknown key 'trajectory.sidee' (Square takes ...)
 """
 
 from __future__ import annotations
 
 import dataclasses
 import os
-import re
-import tomllib
-from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, NoReturn
+from typing import Any
 
 import numpy as np
 
-from .._validation import check_array, check_int, check_option, check_real
 from ..control.adaptive import FuzzyAdaptiveJTPD
 from ..control.controllers import Controller, JacobianTransposePD, JointPD
 from ..control.shapers import Shaper, design, for_modes
-from ..control.trajectories import ELBOWS, Circle, Line, PointToPoint, Square, Waypoints
-from ..errors import InvalidValueError
+from ..control.trajectories import Circle, Line, PointToPoint, Square, Waypoints
 from ..model.arm import FlexibleArm
 from ..model.joints import LinearJoint, MakkarFriction, NonlinearJoint
 from ..model.link import Link
@@ -140,26 +39,22 @@ from ..sensing.delays import (
     travel_delay,
 )
 from ..sensing.sensors import JointSensor, PointSensor, Sensor, TipSensor
+from .scenario_schema import (
+    CONTROLLERS,
+    DELAY_MODELS,
+    JOINT_KINDS,
+    SECTIONS,
+    SENSOR_KINDS,
+    SHAPER_MODES,
+    SHAPERS,
+    TRAJECTORY_KINDS,
+    ScenarioReader,
+    SimulationSettings,
+    read_scenario,
+)
 
-__all__ = [
-    "CONTROLLERS",
-    "DELAY_MODELS",
-    "JOINT_KINDS",
-    "SECTIONS",
-    "SENSORS",
-    "SHAPERS",
-    "SHAPER_MODES",
-    "TRAJECTORIES",
-    "Scenario",
-    "ScenarioError",
-    "SimulationSettings",
-    "apply_overrides",
-    "load_scenario",
-    "read_scenario",
-    "sensor_path_length",
-]
+__all__ = ["SENSORS", "TRAJECTORIES", "Scenario", "load_scenario", "sensor_path_length"]
 
-SECTIONS = ("arm", "trajectory", "sensor", "controller", "delay", "shaper", "simulation")
 TRAJECTORIES: dict[str, type] = {
     "square": Square,
     "circle": Circle,
@@ -168,13 +63,8 @@ TRAJECTORIES: dict[str, type] = {
     "waypoints": Waypoints,
 }
 SENSORS: dict[str, type] = {"joint": JointSensor, "tip": TipSensor, "point": PointSensor}
-CONTROLLERS = ("pd", "jt-pd", "joint-pd", "fuzzy")
-SHAPERS = ("none", "zv", "zvd", "ei")
-SHAPER_MODES = ("first", "all")
-JOINT_KINDS = ("rigid", "linear", "nonlinear")
-DELAY_MODELS = ("seed", "dispersive")
+assert tuple(TRAJECTORIES) == TRAJECTORY_KINDS and tuple(SENSORS) == SENSOR_KINDS
 
-_DEFAULT_KIND = {"trajectory": "square", "sensor": "joint", "controller": "pd", "shaper": "none"}
 _ARM_PASSTHROUGH = (
     "boundary",
     "payload_mass",
@@ -185,154 +75,6 @@ _ARM_PASSTHROUGH = (
     "rotor_coupling",
 )
 _ARM_KEYS = ("preset", "n_modes", "links", "joints", *_ARM_PASSTHROUGH)
-_NOISE_KEYS = ("noise_std", "rate_noise_std", "quantization", "rate_quantization")
-_PARAMETER = re.compile(r"The '(\w+)' parameter")
-
-
-class ScenarioError(InvalidValueError):
-    """A scenario that cannot be built.
-
-    Attributes
-    ----------
-    source : str
-        Where the scenario came from (the file name).
-    key : str or None
-        Dotted key of the offending entry (``"trajectory.side"``,
-        ``"arm.links[1].length"``), the section, or None for the whole file.
-    reason : str
-        The problem, without the source and key.
-    """
-
-    def __init__(self, source: str, key: str | None, reason: str, *, show_key: bool = True):
-        self.source = source
-        self.key = key
-        self.reason = reason
-        where = f"{key}: " if key and show_key else ""
-        super().__init__(f"{source}: {where}{reason}")
-
-
-# ------------------------------------------------------------------ reading
-class _Reader:
-    """Checks a scenario mapping and reports problems against its source."""
-
-    def __init__(self, source: str):
-        self.source = source
-
-    def fail(self, key: str | None, reason: str, *, show_key: bool = True) -> NoReturn:
-        raise ScenarioError(self.source, key, reason, show_key=show_key)
-
-    def table(self, data: Mapping[str, Any], key: str, prefix: str = "") -> dict[str, Any]:
-        value = data.get(key, {})
-        name = f"{prefix}{key}"
-        if not isinstance(value, Mapping):
-            self.fail(name, f"must be a table ([{name}]). Got {value!r} instead.")
-        return dict(value)
-
-    def keys(
-        self, table: Mapping[str, Any], prefix: str, allowed: tuple[str, ...], what: str
-    ) -> None:
-        for key in table:
-            if key not in allowed:
-                self.fail(
-                    f"{prefix}.{key}",
-                    f"unknown key '{prefix}.{key}' ({what} takes {', '.join(allowed)})",
-                    show_key=False,
-                )
-
-    @contextmanager
-    def library(self, prefix: str, table: Mapping[str, Any] | None = None) -> Iterator[None]:
-        """Report the library's TypeError/ValueError against the key it names."""
-        try:
-            yield
-        except ScenarioError:
-            raise
-        except (TypeError, ValueError) as exc:
-            m = _PARAMETER.search(str(exc))
-            key = prefix
-            if m is not None and table is not None and m[1] in table:
-                key = f"{prefix}.{m[1]}"
-            self.fail(key, str(exc))
-
-    def build(self, cls: type, table: Mapping[str, Any], prefix: str, *, kind: bool = False) -> Any:
-        """``cls(**table)`` for a dataclass, with unknown and missing keys named
-        (``kind``: the table also holds the ``kind`` key that chose ``cls``)."""
-        fields = [f for f in dataclasses.fields(cls) if f.init]
-        allowed = tuple(f.name for f in fields)
-        params = {k: v for k, v in table.items() if not (kind and k == "kind")}
-        self.keys(params, prefix, allowed, cls.__name__)
-        required = [
-            f.name
-            for f in fields
-            if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
-        ]
-        for name in required:
-            if name not in params:
-                needs = ", ".join(required)
-                self.fail(prefix, f"missing key '{prefix}.{name}' ({cls.__name__} needs {needs})")
-        with self.library(prefix, params):
-            return cls(**params)
-
-    def kind(self, table: Mapping[str, Any], prefix: str, options: tuple[str, ...]) -> str:
-        value = table.get("kind", _DEFAULT_KIND.get(prefix, options[0]))
-        if not isinstance(value, str) or value not in options:
-            self.fail(f"{prefix}.kind", f"must be one of {options}. Got {value!r} instead.")
-        return value
-
-
-def read_scenario(path: str | os.PathLike[str]) -> dict[str, Any]:
-    """The raw mapping of a TOML scenario file (not yet checked: :meth:`Scenario.from_dict`).
-
-    Raises
-    ------
-    ScenarioError
-        If the file cannot be read or is not valid TOML.
-    """
-    source = os.fspath(path)
-    try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
-    except FileNotFoundError:
-        raise ScenarioError(source, None, "no such file") from None
-    except OSError as exc:
-        raise ScenarioError(source, None, f"cannot read the file: {exc.strerror or exc}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(source, None, f"not valid TOML: {exc}") from None
-    except UnicodeDecodeError:
-        raise ScenarioError(source, None, "not valid TOML: not UTF-8 text") from None
-
-
-def load_scenario(path: str | os.PathLike[str]) -> Scenario:
-    """Read and build a TOML scenario file (module docstring for the schema)."""
-    return Scenario.from_dict(read_scenario(path), source=os.fspath(path))
-
-
-def apply_overrides(data: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
-    """``data`` with ``changes`` (same schema) merged over it, table by table; a new dict.
-
-    Where ``changes`` sets a section's ``kind`` to another kind than ``data``'s
-    (defaults included), that section's other keys in ``data`` are dropped:
-    they were parameters of the other kind. The sensor keeps its noise keys,
-    which every kind takes.
-
-    Examples
-    --------
-    >>> apply_overrides({"controller": {"kind": "pd", "zeta": 0.5}, "shaper": {"kind": "zv"}},
-    ...                 {"controller": {"kind": "joint-pd"}, "shaper": {"tolerance": 0.1}})
-    {'controller': {'kind': 'joint-pd'}, 'shaper': {'kind': 'zv', 'tolerance': 0.1}}
-    """
-    out = dict(data)
-    for section, value in changes.items():
-        old = out.get(section)
-        if not isinstance(value, Mapping) or not isinstance(old, Mapping):
-            out[section] = value
-            continue
-        merged = dict(old)
-        if "kind" in value and value["kind"] != old.get("kind", _DEFAULT_KIND.get(section)):
-            keep = _NOISE_KEYS if section == "sensor" else ()
-            merged = {k: v for k, v in old.items() if k in keep}
-        merged.update(value)
-        out[section] = merged
-    return out
 
 
 # ------------------------------------------------------------------ geometry
@@ -354,62 +96,9 @@ def sensor_path_length(arm: FlexibleArm, sensor: Sensor) -> float:
     return float(sum(lk.length for lk in arm.links[:link]) + distance)
 
 
-# ------------------------------------------------------------------ settings
-@dataclass(frozen=True)
-class SimulationSettings:
-    """The ``[simulation]`` section: keyword arguments of :func:`flexarm.sim.simulate.simulate`.
-
-    Parameters
-    ----------
-    duration : float, optional
-        Simulated time, s (> 0; None: the trajectory's duration).
-    dt : float
-        Control period, s (> 0).
-    substeps : int
-        RK4 steps per control period (>= 1).
-    torque_limit : float or tuple of float, optional
-        Symmetric saturation of the joint torques, N m (> 0; None: none).
-    seed : int, optional
-        Seed of the sensor noise (>= 0; None: unseeded).
-    elbow : {"positive", "negative"}
-        Inverse-kinematics branch of the reference.
-    max_deflection : float, optional
-        Link tip deflection counted as divergence, m (> 0; None: the link's length).
-    """
-
-    duration: float | None = None
-    dt: float = 2e-4
-    substeps: int = 1
-    torque_limit: float | tuple[float, ...] | None = None
-    seed: int | None = None
-    elbow: str = "positive"
-    max_deflection: float | None = None
-
-    def __post_init__(self) -> None:
-        owner = "SimulationSettings"
-        set_ = object.__setattr__
-        if self.duration is not None:
-            set_(self, "duration", check_real(self.duration, "duration", owner, positive=True))
-        set_(self, "dt", check_real(self.dt, "dt", owner, positive=True))
-        set_(self, "substeps", check_int(self.substeps, "substeps", owner, minimum=1))
-        if self.torque_limit is not None:
-            limit = check_array(self.torque_limit, "torque_limit", owner, finite=False)
-            if limit.ndim > 1 or limit.dtype.kind == "c" or not np.all(limit > 0):
-                raise InvalidValueError(
-                    f"The 'torque_limit' parameter of {owner} must be > 0, a scalar or one per "
-                    f"joint. Got {self.torque_limit!r} instead."
-                )
-            value = float(limit) if limit.ndim == 0 else tuple(float(x) for x in limit)
-            set_(self, "torque_limit", value)
-        if self.seed is not None:
-            set_(self, "seed", check_int(self.seed, "seed", owner, minimum=0))
-        check_option(self.elbow, "elbow", owner, ELBOWS)
-        if self.max_deflection is not None:
-            set_(
-                self,
-                "max_deflection",
-                check_real(self.max_deflection, "max_deflection", owner, positive=True),
-            )
+def load_scenario(path: str | os.PathLike[str]) -> Scenario:
+    """Read and build a TOML scenario file (module docstring for the schema)."""
+    return Scenario.from_dict(read_scenario(path), source=os.fspath(path))
 
 
 # ------------------------------------------------------------------ scenario
@@ -470,7 +159,7 @@ class Scenario:
         ScenarioError
             For an unknown section or key, a missing key or a rejected value.
         """
-        r = _Reader(source)
+        r = ScenarioReader(source)
         if not isinstance(data, Mapping):
             r.fail(None, f"must be a table of sections. Got {type(data).__name__} instead.")
         for key, value in data.items():
@@ -510,7 +199,7 @@ class Scenario:
         )
 
     def simulate_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :func:`flexarm.sim.simulate.simulate` after the arm:
+        """Keyword arguments of :func:`flexarm.simulate` after the arm:
         ``simulate(s.arm, **s.simulate_kwargs())``."""
         s = self.simulation
         return {
@@ -531,7 +220,7 @@ class Scenario:
 
 
 # ------------------------------------------------------------------ sections
-def _arm(r: _Reader, data: Mapping[str, Any]) -> tuple[FlexibleArm, dict[str, Any]]:
+def _arm(r: ScenarioReader, data: Mapping[str, Any]) -> tuple[FlexibleArm, dict[str, Any]]:
     t = r.table(data, "arm")
     r.keys(t, "arm", _ARM_KEYS, "[arm]")
     preset, links = t.get("preset"), t.get("links")
@@ -584,7 +273,7 @@ def _arm(r: _Reader, data: Mapping[str, Any]) -> tuple[FlexibleArm, dict[str, An
 
 
 def _joints(
-    r: _Reader, arm_table: Mapping[str, Any], n_links: int
+    r: ScenarioReader, arm_table: Mapping[str, Any], n_links: int
 ) -> tuple[list[LinearJoint | NonlinearJoint] | None, dict[str, Any]]:
     t = r.table(arm_table, "joints", "arm.")
     kind = r.kind(t, "arm.joints", JOINT_KINDS)
@@ -621,7 +310,7 @@ def _joints(
     return [joint] * n_links, description
 
 
-def _trajectory(r: _Reader, data: Mapping[str, Any]) -> tuple[Any, dict[str, Any]]:
+def _trajectory(r: ScenarioReader, data: Mapping[str, Any]) -> tuple[Any, dict[str, Any]]:
     t = r.table(data, "trajectory")
     kind = r.kind(t, "trajectory", tuple(TRAJECTORIES))
     traj = r.build(TRAJECTORIES[kind], t, "trajectory", kind=True)
@@ -629,18 +318,20 @@ def _trajectory(r: _Reader, data: Mapping[str, Any]) -> tuple[Any, dict[str, Any
     return traj, {"kind": kind, **params, "duration_s": float(traj.duration)}
 
 
-def _sensor(r: _Reader, data: Mapping[str, Any], arm: FlexibleArm) -> tuple[Sensor, dict[str, Any]]:
+def _sensor(
+    r: ScenarioReader, data: Mapping[str, Any], arm: FlexibleArm
+) -> tuple[Sensor, dict[str, Any]]:
     t = r.table(data, "sensor")
     kind = r.kind(t, "sensor", tuple(SENSORS))
     sensor: Sensor = r.build(SENSORS[kind], t, "sensor", kind=True)
     with r.library("sensor", t):
         sensor.resolve(arm)
-    params = {f.name: getattr(sensor, f.name) for f in dataclasses.fields(sensor)}
+    params = {f.name: getattr(sensor, f.name) for f in dataclasses.fields(SENSORS[kind])}
     return sensor, {"kind": kind, "spec": sensor.describe(arm), **params}
 
 
 def _controller(
-    r: _Reader, data: Mapping[str, Any], arm: FlexibleArm
+    r: ScenarioReader, data: Mapping[str, Any], arm: FlexibleArm
 ) -> tuple[Controller, dict[str, Any]]:
     t = r.table(data, "controller")
     kind = r.kind(t, "controller", CONTROLLERS)
@@ -672,7 +363,7 @@ def _controller(
 
 
 def _delay(
-    r: _Reader, data: Mapping[str, Any], arm: FlexibleArm, sensor: Sensor
+    r: ScenarioReader, data: Mapping[str, Any], arm: FlexibleArm, sensor: Sensor
 ) -> tuple[DelayModel, bool, dict[str, Any]]:
     t = r.table(data, "delay")
     r.keys(t, "delay", ("delay", "method", "order", "reference"), "[delay]")
@@ -715,7 +406,7 @@ def _delay(
 
 
 def _shaper(
-    r: _Reader, data: Mapping[str, Any], arm: FlexibleArm
+    r: ScenarioReader, data: Mapping[str, Any], arm: FlexibleArm
 ) -> tuple[Shaper | None, dict[str, Any]]:
     t = r.table(data, "shaper")
     kind = r.kind(t, "shaper", SHAPERS)
@@ -754,7 +445,7 @@ def _shaper(
 
 
 def _simulation(
-    r: _Reader, data: Mapping[str, Any], arm: FlexibleArm, trajectory: Any
+    r: ScenarioReader, data: Mapping[str, Any], arm: FlexibleArm, trajectory: Any
 ) -> tuple[SimulationSettings, dict[str, Any]]:
     t = r.table(data, "simulation")
     settings: SimulationSettings = r.build(SimulationSettings, t, "simulation")

@@ -13,7 +13,7 @@ Makkar friction on the link side and a motor-side (back-EMF) damping
 ``u`` into the applied torque ``tau = phi(u)`` with a dead band and a
 saturation (:class:`DriveNonlinearity`). The command is a seeded
 piecewise-constant random sequence, ``u ~ U(-amplitude, amplitude)`` i.i.d.,
-held for ``hold`` seconds; :func:`flexarm.sim.simulate.simulate` plays it through
+held for ``hold`` seconds; :func:`flexarm.simulate` plays it through
 a :class:`~flexarm.control.controllers.CompiledController` (open loop) at the sample
 period ``dt`` (default 0.2 ms).
 

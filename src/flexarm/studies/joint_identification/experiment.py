@@ -19,7 +19,7 @@ from ...control.controllers import CompiledController
 from ...model.arm import FlexibleArm
 from ...model.joints import LinearJoint, MakkarFriction, NonlinearJoint
 from ...model.link import Link
-from ...sim.simulate import simulate
+from ...sim.closed_loop import simulate
 from .parameters import JointExcitation, JointSensors
 
 __all__ = ["JointMeasurements", "JointRecord", "joint_test_arm", "measure", "run_excitation"]
@@ -92,7 +92,7 @@ class JointRecord:
     tau: F64
     command: F64
     hold_steps: int
-    status: str | None
+    status: str
 
     @property
     def n_holds(self) -> int:
@@ -192,7 +192,7 @@ def run_excitation(
         tau=res.tau[:, 0],
         command=command,
         hold_steps=steps,
-        status=res.info.get("status"),
+        status=str(res.info["status"]),
     )
 
 

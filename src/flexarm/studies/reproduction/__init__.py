@@ -12,7 +12,7 @@ completes without diverging and its RMS end-effector error is at most
 The paper gives no figure; the tolerance is a parameter and the report prints
 every error beside the verdict, so a reader can apply their own.
 
-Every run is one :func:`flexarm.sim.simulate.simulate` call built from a
+Every run is one :func:`flexarm.simulate` call built from a
 :class:`flexarm.sim.scenario.Scenario`, so each case can be rerun with
 ``flexarm simulate --scenario`` (the report lists the settings). A run that
 diverges is reported as such, with the time, and its partial result is kept

@@ -7,7 +7,7 @@ under each delay model; the fuzzy law over ``ks`` and the adaptation laws).
 Runs that two lists share (and nonadaptive runs that differ only in the fuzzy
 settings, which they ignore) are run once.
 
-Every run is one :func:`flexarm.sim.simulate.simulate` call built from a
+Every run is one :func:`flexarm.simulate` call built from a
 :class:`flexarm.sim.scenario.Scenario`, so each case can be rerun with
 ``flexarm simulate --scenario``. A run that diverges is a result: its status,
 the time and the partial series are kept (:func:`run_case`).
@@ -24,8 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...control.linearize import closed_loop_poles
+from ...sim.closed_loop import simulate
+from ...sim.results import SimulationError
 from ...sim.scenario import Scenario
-from ...sim.simulate import SimulationError, simulate
 from .cases import CONTROLLER_KINDS, SENSOR_CASES, Case, CaseResult
 
 __all__ = ["Progress", "RunMatrix", "progress_printer", "run_case", "square_side"]

@@ -1,0 +1,197 @@
+"""The arm packed as plain arrays for compiled code: :class:`ArmArrays`, :class:`Workspace`.
+
+:attr:`flexarm.FlexibleArm.arrays` builds an :class:`ArmArrays` once (with
+:func:`pack_arm_arrays`, by keyword); the compiled kernels of
+:mod:`flexarm.model.dynamics` read it. This module needs NumPy only, so an arm
+can be built without loading Numba.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InvalidValueError
+
+__all__ = [
+    "HUB_MASS",
+    "INERTIA",
+    "J_A1",
+    "J_A2",
+    "J_ASW",
+    "J_COUPLED",
+    "J_DAMPING",
+    "J_FRICTION_ON_MOTOR",
+    "J_G1",
+    "J_HAS_FRICTION",
+    "J_INERTIA",
+    "J_KSW",
+    "LEN",
+    "MASS",
+    "N_JOINT_COLUMNS",
+    "N_LINK_COLUMNS",
+    "STATIC",
+    "ArmArrays",
+    "Workspace",
+    "make_workspace",
+    "pack_arm_arrays",
+]
+
+F64 = NDArray[np.float64]
+
+# Columns of ArmArrays.link
+LEN, MASS, STATIC, INERTIA, HUB_MASS = 0, 1, 2, 3, 4
+N_LINK_COLUMNS = 5
+# Columns of ArmArrays.joint
+J_A1, J_A2, J_KSW, J_ASW, J_INERTIA, J_DAMPING, J_COUPLED = 0, 1, 2, 3, 4, 5, 6
+J_HAS_FRICTION, J_FRICTION_ON_MOTOR, J_G1 = 7, 8, 9
+N_JOINT_COLUMNS = 15
+
+
+class ArmArrays(NamedTuple):
+    """The arm packed as plain arrays for the compiled kernels.
+
+    Attributes
+    ----------
+    mode_start : int64 array, shape (n_links + 1,)
+        Index in ``q`` of link ``i``'s first modal coordinate; link ``i`` owns
+        ``q[mode_start[i]:mode_start[i + 1]]``.
+    link : float array, shape (n_links, 5)
+        Per link: length (m), mass ``rho L`` (kg), static moment ``rho L**2 / 2``
+        (kg m), inertia about the joint ``rho L**3 / 3 + hub_inertia`` (kg m**2),
+        hub mass at the joint (kg).
+    mass_integral, moment_integral, tip_deflection, tip_slope : float arrays, shape (n_dof,)
+        ``int rho phi``, ``int rho x phi``, ``phi(L)``, ``phi'(L)`` at each modal
+        coordinate's index in ``q`` (zero at joint indices).
+    modal_mass : float array, shape (n_dof, n_dof)
+        ``int rho phi_j phi_k`` within each link's block, zero elsewhere.
+    stiffness, damping : float arrays, shape (n_dof,)
+        Diagonal of the stiffness (N m) and damping (N m s) matrices.
+    payload : float array, shape (2,)
+        Payload mass (kg) and rotary inertia (kg m**2) at the last link's tip.
+    joint : float array, shape (n_joints, 15)
+        Flexible joints (``n_joints`` is 0 for rigid joints or ``n_links``), one
+        row each: ``a1, a2, ksw, asw`` of the spring law (a linear joint is
+        ``k, 0, 0, 0``), reflected motor inertia ``J_m``, motor viscous damping,
+        rotor coupling flag (1: the rotor turns with its carrier link), friction
+        flag, friction side (0: link, 1: motor), Makkar ``g1..g6``. The motor
+        angle of joint ``i`` is ``q[mode_start[-1] + i]``.
+    """
+
+    mode_start: NDArray[np.int64]
+    link: F64
+    mass_integral: F64
+    moment_integral: F64
+    tip_deflection: F64
+    tip_slope: F64
+    modal_mass: F64
+    stiffness: F64
+    damping: F64
+    payload: F64
+    joint: F64
+
+
+class Workspace(NamedTuple):
+    """Scratch arrays for one thread of kernel calls (``n = n_dof``).
+
+    ``mass`` and ``bias`` hold :func:`mass_and_bias`'s results in the order of
+    ``q``; the other arrays are scratch of the solver, which works in the
+    link-major order of :func:`local_order`.
+    """
+
+    mass: F64  # (n, n) M(q), order of q
+    bias: F64  # (n,) C(q, dq) dq, order of q
+    jac: F64  # (2, n) base velocity Jacobian of the current link, link frame, local order
+    angle: F64  # (n,) gradient of the current link's absolute angle, local order
+    rhs: F64  # (n,) generalised forces, order of q
+    rows: F64  # (3, n) rows of the body inertia times the body Jacobian, local order
+    lmass: F64  # (n, n) lower triangle of M, then its LDL' factor, local order
+    lbias: F64  # (n,) C(q, dq) dq, then the right-hand side and solution, local order
+    inv_diag: F64  # (n,) reciprocal pivots of the LDL' factor
+
+
+def make_workspace(n_dof: int) -> Workspace:
+    """Allocate the scratch arrays for an arm with ``n_dof`` coordinates."""
+    n = int(n_dof)
+    return Workspace(
+        mass=np.zeros((n, n)),
+        bias=np.zeros(n),
+        jac=np.zeros((2, n)),
+        angle=np.zeros(n),
+        rhs=np.zeros(n),
+        rows=np.zeros((3, n)),
+        lmass=np.zeros((n, n)),
+        lbias=np.zeros(n),
+        inv_diag=np.zeros(n),
+    )
+
+
+def pack_arm_arrays(
+    *,
+    mode_start: NDArray[np.int64],
+    link: F64,
+    mass_integral: F64,
+    moment_integral: F64,
+    tip_deflection: F64,
+    tip_slope: F64,
+    modal_mass: F64,
+    stiffness: F64,
+    damping: F64,
+    payload: F64,
+    joint: F64,
+) -> ArmArrays:
+    """The one way to build :class:`ArmArrays`: by keyword, shapes and dtypes checked,
+    every array contiguous and read-only.
+
+    Raises
+    ------
+    ValueError
+        If an array's shape does not fit the others (``n_links`` from
+        ``mode_start``, ``n_dof`` from ``mass_integral``).
+    """
+    ms = np.ascontiguousarray(mode_start, dtype=np.int64)
+    n_links = ms.shape[0] - 1
+    n = int(np.asarray(mass_integral).shape[0])
+    shapes = {
+        "link": (n_links, N_LINK_COLUMNS),
+        "mass_integral": (n,),
+        "moment_integral": (n,),
+        "tip_deflection": (n,),
+        "tip_slope": (n,),
+        "modal_mass": (n, n),
+        "stiffness": (n,),
+        "damping": (n,),
+        "payload": (2,),
+    }
+    given = {
+        "link": link,
+        "mass_integral": mass_integral,
+        "moment_integral": moment_integral,
+        "tip_deflection": tip_deflection,
+        "tip_slope": tip_slope,
+        "modal_mass": modal_mass,
+        "stiffness": stiffness,
+        "damping": damping,
+        "payload": payload,
+        "joint": joint,
+    }
+    out: dict[str, F64] = {}
+    for name, value in given.items():
+        arr = np.ascontiguousarray(value, dtype=np.float64)
+        want = shapes.get(name, (arr.shape[0], N_JOINT_COLUMNS))
+        if arr.shape != want or (name == "joint" and arr.shape[0] not in (0, n_links)):
+            raise InvalidValueError(
+                f"The '{name}' parameter of pack_arm_arrays must be of shape {want}. "
+                f"Got shape {arr.shape} instead."
+            )
+        arr.flags.writeable = False
+        out[name] = arr
+    if ms.ndim != 1 or n_links < 1 or ms[0] != n_links or np.any(np.diff(ms) < 0):
+        raise InvalidValueError(
+            "The 'mode_start' parameter of pack_arm_arrays must start at n_links and "
+            f"not decrease. Got {ms.tolist()} instead."
+        )
+    ms.flags.writeable = False
+    return ArmArrays(mode_start=ms, **out)

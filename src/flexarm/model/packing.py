@@ -1,0 +1,123 @@
+"""From arm parameters to the packed arrays: clamped-mass tip loads and :func:`pack`."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Protocol
+
+import numpy as np
+
+from .arrays import (
+    J_A1,
+    J_ASW,
+    J_COUPLED,
+    J_DAMPING,
+    J_FRICTION_ON_MOTOR,
+    J_G1,
+    J_HAS_FRICTION,
+    J_INERTIA,
+    N_JOINT_COLUMNS,
+    N_LINK_COLUMNS,
+    ArmArrays,
+    pack_arm_arrays,
+)
+from .joints import LinearJoint, NonlinearJoint
+from .link import Link
+from .modes import BeamModes
+
+__all__ = ["PackableArm", "outboard_loads", "pack"]
+
+
+class PackableArm(Protocol):
+    """What :func:`pack` and :func:`outboard_loads` read of an arm."""
+
+    @property
+    def links(self) -> Sequence[Link]: ...
+    @property
+    def joints(self) -> Sequence[LinearJoint | NonlinearJoint] | None: ...
+    @property
+    def boundary(self) -> str: ...
+    @property
+    def payload_mass(self) -> float: ...
+    @property
+    def payload_inertia(self) -> float: ...
+    @property
+    def rotor_coupling(self) -> bool: ...
+    @property
+    def joint_friction(self) -> str: ...
+    @property
+    def modes(self) -> tuple[BeamModes, ...]: ...
+    @property
+    def n_dof(self) -> int: ...
+    @property
+    def n_links(self) -> int: ...
+
+
+def outboard_loads(arm: PackableArm) -> list[tuple[float, float]]:
+    """Tip mass (kg) and rotary inertia about the tip (kg m**2) loading each link's
+    modes: zero for ``"clamped-free"``; for ``"clamped-mass"`` everything outboard
+    (beams, hub masses and inertias, rotors, payload), the chain straight."""
+    links = arm.links
+    if arm.boundary == "clamped-free":
+        return [(0.0, 0.0)] * len(links)
+    loads = []
+    for i in range(len(links)):
+        mass = arm.payload_mass
+        inertia = arm.payload_inertia
+        d = 0.0  # distance from tip i to the base of the next outboard link
+        for k, lk in enumerate(links[i + 1 :], start=i + 1):
+            mass += lk.hub_mass + lk.mass
+            inertia += lk.hub_mass * d**2 + lk.hub_inertia
+            if arm.joints is not None:
+                inertia += arm.joints[k].motor_inertia
+            inertia += lk.linear_density * ((d + lk.length) ** 3 - d**3) / 3.0
+            d += lk.length
+        inertia += arm.payload_mass * d**2
+        loads.append((mass, inertia))
+    return loads
+
+
+def pack(arm: PackableArm) -> ArmArrays:
+    """``arm`` as :class:`ArmArrays` for the compiled kernels (read-only arrays)."""
+    n, N = arm.n_dof, arm.n_links
+    start = np.zeros(N + 1, dtype=np.int64)
+    start[0] = N
+    for i, lk in enumerate(arm.links):
+        start[i + 1] = start[i] + lk.n_modes
+    link = np.zeros((N, N_LINK_COLUMNS))
+    v, w, h, g = (np.zeros(n) for _ in range(4))
+    md = np.zeros((n, n))
+    k, d = np.zeros(n), np.zeros(n)
+    for i, (lk, bm) in enumerate(zip(arm.links, arm.modes, strict=True)):
+        L, rho = lk.length, lk.linear_density
+        link[i] = (L, rho * L, rho * L**2 / 2, rho * L**3 / 3 + lk.hub_inertia, lk.hub_mass)
+        s = slice(start[i], start[i + 1])
+        v[s], w[s] = bm.mass_integral, bm.moment_integral
+        h[s], g[s] = bm.tip_deflection, bm.tip_slope
+        md[s, s] = bm.modal_mass
+        k[s] = np.diag(bm.modal_stiffness)
+        d[s] = 2.0 * lk.modal_damping * bm.frequencies * np.diag(bm.generalized_mass)
+    joint = np.zeros((len(arm.joints or ()), N_JOINT_COLUMNS))
+    for i, jt in enumerate(arm.joints or ()):
+        row = joint[i]
+        row[J_A1 : J_ASW + 1] = jt.spring_params
+        row[J_INERTIA] = jt.motor_inertia
+        row[J_DAMPING] = jt.motor_damping
+        row[J_COUPLED] = float(arm.rotor_coupling)
+        if jt.friction is not None:
+            row[J_HAS_FRICTION] = 1.0
+            row[J_FRICTION_ON_MOTOR] = float(arm.joint_friction == "motor")
+            row[J_G1:] = jt.friction.params
+    return pack_arm_arrays(
+        mode_start=start,
+        link=link,
+        mass_integral=v,
+        moment_integral=w,
+        tip_deflection=h,
+        tip_slope=g,
+        modal_mass=md,
+        stiffness=k,
+        damping=d,
+        payload=np.array([arm.payload_mass, arm.payload_inertia]),
+        joint=joint,
+    )

@@ -1,0 +1,307 @@
+"""The reference pipeline: trajectory -> shaped -> delayed -> joint references.
+
+:func:`reference_signals` builds, at every control instant, the reference vector
+``r`` a controller reads (layout in :mod:`flexarm.control.signals`):
+
+1. the trajectory gives the desired end-effector path;
+2. an input shaper (:mod:`flexarm.control.shapers`) reshapes it;
+3. with a reference delay, it is delayed by the sensor's transport delay (the
+   paper's correction of the non-minimum-phase response, "time delays for
+   command signals input to the control law");
+4. inverse kinematics (two-link arms) turns it into joint angles and rates
+   (:func:`joint_path`);
+5. for a sensed point short of the end effector, the operational-space command
+   is that point's position and velocity on the rigid arm following the joint
+   references (paper.md §4: ``e = x_c - x`` with ``x`` the sensed point).
+
+Tracking errors are measured against the desired path of step 1 (unshaped,
+undelayed), which the pipeline returns beside ``r``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import NamedTuple, Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_option, check_real
+from ..control.signals import (
+    r_acceleration,
+    r_angles,
+    r_position,
+    r_rates,
+    r_velocity,
+    reference_size,
+)
+from ..control.trajectories import ELBOWS, Trajectory, check_trajectory, evaluation_times
+from ..errors import InvalidValueError
+from ..model.kinematics import lever_lengths, rigid_jacobian, rigid_point
+
+__all__ = ["ReferenceSignals", "joint_path", "joint_reference", "reference_signals"]
+
+F64 = NDArray[np.float64]
+PathFunction = Callable[[F64], tuple[F64, F64, F64]]
+
+
+class KinematicArm(Protocol):
+    """What the pipeline reads of an arm: its links' lengths and inverse kinematics."""
+
+    @property
+    def n_links(self) -> int: ...
+    @property
+    def link_lengths(self) -> F64: ...
+
+    def inverse_kinematics(self, position: ArrayLike, elbow: str = ...) -> F64: ...
+
+
+class PathShaper(Protocol):
+    """What the pipeline needs of an input shaper (:class:`flexarm.control.shapers.Shaper`)."""
+
+    def apply_function(self, fn: PathFunction) -> PathFunction: ...
+
+
+class ReferenceSignals(NamedTuple):
+    """What :func:`reference_signals` returns.
+
+    reference : ndarray, shape (K, 6 + 2 n_links)
+        ``r`` at each control instant (:mod:`flexarm.control.signals`).
+    desired : ndarray, shape (K, 2)
+        The desired end-effector path, m (unshaped, undelayed).
+    initial_angles : ndarray, shape (n_links,) or None
+        Joint angles that put the rigid arm on the desired path's first point
+        (two-link arms), rad.
+    """
+
+    reference: F64
+    desired: F64
+    initial_angles: F64 | None
+
+
+def joint_path(
+    arm: KinematicArm,
+    position: F64,
+    velocity: F64,
+    acceleration: F64 | None = None,
+    *,
+    elbow: str = "positive",
+    singularity_tol: float = 1e-3,
+    times: F64 | None = None,
+    owner: str = "joint_path",
+) -> tuple[F64, F64, F64 | None]:
+    """Joint angles, rates (and accelerations) of a rigid two-link arm on a path.
+
+    ``theta`` from the inverse kinematics; the rates solve ``J(theta) dtheta = v``
+    and the accelerations ``J(theta) ddtheta = a - Jdot(theta, dtheta) dtheta``
+    with, for absolute link angles ``phi_i``,
+    ``Jdot dtheta = -sum_i L_i dphi_i**2 (cos phi_i, sin phi_i)``.
+
+    Parameters
+    ----------
+    arm : FlexibleArm or alike
+        A two-link arm.
+    position, velocity : ndarray, shape (m, 2)
+        The path, m and m/s.
+    acceleration : ndarray, shape (m, 2), optional
+        Its acceleration, m/s**2 (for ``ddtheta``).
+    elbow : {"positive", "negative"}
+        The branch (sign of ``theta_2``).
+    singularity_tol : float
+        Smallest allowed ``|det J| / (L_1 L_2) = |sin theta_2|``.
+    times : ndarray, shape (m,), optional
+        The samples' times, s (named in error messages).
+    owner : str
+        Named in error messages.
+
+    Returns
+    -------
+    theta, dtheta, ddtheta : ndarray, shape (m, 2)
+        rad, rad/s, rad/s**2 (``ddtheta`` None without ``acceleration``).
+
+    Raises
+    ------
+    InvalidValueError
+        If the arm does not have two links, the path leaves the workspace, or
+        passes within ``singularity_tol`` of a singularity.
+    """
+    n = int(arm.n_links)
+    if n != 2:
+        raise InvalidValueError(
+            f"The 'arm' parameter of {owner} must have 2 links. Got {n} links instead."
+        )
+    try:
+        theta = arm.inverse_kinematics(position, elbow=elbow)
+    except ValueError as exc:
+        raise InvalidValueError(
+            f"The 'trajectory' parameter of {owner} must stay inside the arm's workspace. {exc}"
+        ) from exc
+    lengths = np.asarray(arm.link_lengths, dtype=float)
+    jac = rigid_jacobian(lengths, theta)
+    (a, b), (c, d) = jac[:, 0].T, jac[:, 1].T
+    det = a * d - b * c
+    near = np.abs(det) / (lengths[0] * lengths[1])
+    if np.any(near < singularity_tol):
+        k = int(np.argmax(near < singularity_tol))
+        when = f"t = {times[k]} s, at " if times is not None else ""
+        raise InvalidValueError(
+            f"The 'trajectory' parameter of {owner} must stay clear of singularities, "
+            f"with |det J| / (L1 L2) >= {singularity_tol}. Got {near[k]:.3g} at {when}"
+            f"{position[k].tolist()} m ({int(np.sum(near < singularity_tol))} samples too "
+            "close) instead."
+        )
+
+    def solve(rhs: F64) -> F64:  # J x = rhs in closed form, row by row
+        x = np.stack([d * rhs[:, 0] - b * rhs[:, 1], a * rhs[:, 1] - c * rhs[:, 0]], axis=1)
+        return np.asarray(x / det[:, None], dtype=np.float64)
+
+    dtheta = solve(velocity)
+    if acceleration is None:
+        return theta, dtheta, None
+    phi = np.cumsum(theta, axis=1)
+    weight = lengths * np.cumsum(dtheta, axis=1) ** 2
+    jdot_dtheta = -np.stack(
+        [np.sum(weight * np.cos(phi), axis=1), np.sum(weight * np.sin(phi), axis=1)], axis=1
+    )
+    return theta, dtheta, solve(acceleration - jdot_dtheta)
+
+
+def joint_reference(
+    arm: KinematicArm,
+    trajectory: Trajectory,
+    t: ArrayLike,
+    elbow: str = "positive",
+    *,
+    singularity_tol: float = 1e-3,
+) -> tuple[F64, F64, F64]:
+    """Joint angles, rates and accelerations of a rigid two-link arm that follow a path.
+
+    Parameters
+    ----------
+    arm : FlexibleArm or alike
+        Two-link arm (``n_links``, ``link_lengths`` in m, ``inverse_kinematics``).
+    trajectory : Trajectory
+        The end-effector path.
+    t : float or array_like, shape (m,)
+        Times, s.
+    elbow : {"positive", "negative"}
+        The inverse-kinematics branch (sign of ``theta_2``).
+    singularity_tol : float
+        Smallest allowed ``|det J| / (L_1 L_2) = |sin theta_2|`` (> 0). The
+        default 1e-3 (``theta_2`` within 0.057 deg of 0 or pi: full reach or
+        folded back over the base) is where the rates exceed ~1000 times the
+        path speed divided by a link length.
+
+    Returns
+    -------
+    theta, dtheta, ddtheta : ndarray, shape (m, 2) or (2,)
+        In rad, rad/s and rad/s**2 (:func:`joint_path`). ``theta_1`` is wrapped
+        to ``[-pi, pi)`` as the inverse kinematics return it (use
+        ``numpy.unwrap`` along time for a path that circles the base).
+
+    Raises
+    ------
+    ValueError
+        If the arm does not have two links, the path leaves the workspace at
+        some ``t``, or passes within ``singularity_tol`` of a singularity at
+        some ``t`` (only the sampled times are checked).
+
+    Examples
+    --------
+    >>> from flexarm import FlexibleArm
+    >>> from flexarm.control.trajectories import Square
+    >>> th, dth, ddth = joint_reference(FlexibleArm.paper(), Square(), [0.0, 2.5])
+    >>> th.shape, dth.shape
+    ((2, 2), (2, 2))
+    """
+    owner = "joint_reference"
+    check_trajectory(trajectory, owner)
+    check_option(elbow, "elbow", owner, ELBOWS)
+    tol = check_real(singularity_tol, "singularity_tol", owner, positive=True)
+    tt, scalar = evaluation_times(t, owner)
+    pos, vel, acc = trajectory.evaluate(tt)
+    theta, dtheta, ddtheta = joint_path(
+        arm, pos, vel, acc, elbow=elbow, singularity_tol=tol, times=tt, owner=owner
+    )
+    assert ddtheta is not None
+    if scalar:
+        return theta[0], dtheta[0], ddtheta[0]
+    return theta, dtheta, ddtheta
+
+
+def reference_signals(
+    arm: KinematicArm,
+    trajectory: Trajectory,
+    t: F64,
+    *,
+    shaper: PathShaper | None = None,
+    delay: float = 0.0,
+    point: tuple[int, float] | None = None,
+    elbow: str = "positive",
+    singularity_tol: float = 1e-6,
+    owner: str = "simulate",
+) -> ReferenceSignals:
+    """The reference ``r`` at the control instants ``t`` (module docstring).
+
+    Parameters
+    ----------
+    arm : FlexibleArm or alike
+    trajectory : Trajectory
+        The desired end-effector path.
+    t : ndarray, shape (K,)
+        Control instants, s.
+    shaper : Shaper, optional
+        Input shaper applied to the path.
+    delay : float
+        Delay of the reference fed to the law, s (0: none).
+    point : (link, distance), optional
+        A sensed point short of the end effector (two-link arms): the
+        operational-space command becomes that point's path.
+    elbow : {"positive", "negative"}
+        Inverse-kinematics branch.
+    singularity_tol : float
+        Passed to :func:`joint_path`.
+    owner : str
+        Named in error messages.
+    """
+    n_links = int(arm.n_links)
+    path: PathFunction = trajectory.evaluate
+    if shaper is not None:
+        path = shaper.apply_function(trajectory.evaluate)
+    pos, vel, acc = (np.asarray(a, dtype=float) for a in path(t - delay))
+    plain = shaper is None and delay == 0.0
+    desired = pos if plain else np.asarray(trajectory.evaluate(t)[0], dtype=float)
+    r = np.zeros((t.shape[0], reference_size(n_links)))
+    rp, rv, ra = r_position(n_links), r_velocity(n_links), r_acceleration(n_links)
+    r[:, rp : rp + 2], r[:, rv : rv + 2], r[:, ra : ra + 2] = pos, vel, acc
+    initial = None
+    if n_links == 2:
+        theta, dtheta, _ = joint_path(
+            arm, pos, vel, elbow=elbow, singularity_tol=singularity_tol, times=t, owner=owner
+        )
+        r[:, r_angles(n_links) : r_angles(n_links) + n_links] = theta
+        r[:, r_rates(n_links) : r_rates(n_links) + n_links] = dtheta
+        start = desired[:1]
+        initial = joint_path(
+            arm,
+            start,
+            np.zeros_like(start),
+            elbow=elbow,
+            singularity_tol=singularity_tol,
+            times=t[:1],
+            owner=owner,
+        )[0][0]
+        if point is not None:
+            levers = lever_lengths(arm.link_lengths, *point)
+            p_r, v_r = rigid_point(levers, theta, dtheta)
+            assert v_r is not None
+            r[:, rp : rp + 2], r[:, rv : rv + 2] = p_r, v_r
+            dt = float(t[1] - t[0]) if t.shape[0] > 1 else 1.0
+            r[:, ra : ra + 2] = np.gradient(v_r, dt, axis=0) if t.shape[0] > 2 else 0.0
+    elif point is not None:
+        raise InvalidValueError(
+            f"The 'sensor' parameter of {owner} may be a point short of the end effector "
+            f"only on a two-link arm (its command needs inverse kinematics). Got a point "
+            f"on link {point[0]} of a {n_links}-link arm instead."
+        )
+    return ReferenceSignals(reference=r, desired=desired, initial_angles=initial)
