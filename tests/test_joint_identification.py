@@ -19,6 +19,7 @@ from flexarm.studies.joint_identification import (
     identify_joint,
     joint_test_arm,
 )
+from flexarm.studies.joint_identification.experiment import run_excitation
 
 matplotlib.use("Agg")
 
@@ -28,6 +29,16 @@ SHORT = JointExcitation(duration=20.0)
 @pytest.fixture(scope="module")
 def result():
     return identify_joint(excitation=SHORT, rng=0)
+
+
+def test_the_experiment_applies_the_held_drive_map_open_loop():
+    ex = JointExcitation(duration=1.0)  # 5000 periods of 0.2 ms, holds of 50 periods
+    rec = run_excitation(joint_test_arm(), ex, np.random.default_rng(0))
+    assert rec.command.shape == (101,) and rec.n_holds == 100 and rec.q.shape == (5001,)
+    k = np.arange(5001)
+    np.testing.assert_array_equal(rec.tau, ex.drive(rec.command[k // 50]))
+    assert rec.q[0] == rec.q_m[0] == rec.v[0] == rec.v_m[0] == 0.0  # from rest
+    assert rec.status == "ok"
 
 
 def test_stiffness_curve_and_soft_windup(result):

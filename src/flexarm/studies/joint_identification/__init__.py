@@ -13,9 +13,9 @@ Makkar friction on the link side and a motor-side (back-EMF) damping
 ``u`` into the applied torque ``tau = phi(u)`` with a dead band and a
 saturation (:class:`DriveNonlinearity`). The command is a seeded
 piecewise-constant random sequence, ``u ~ U(-amplitude, amplitude)`` i.i.d.,
-held for ``hold`` seconds; :func:`flexarm.simulate` plays it through
-a :class:`~flexarm.control.controllers.CompiledController` (open loop) at the sample
-period ``dt`` (default 0.2 ms).
+held for ``hold`` seconds, drives the plant with no controller in the loop
+(:func:`flexarm.simulate_open_loop`, the torque held over each sample period
+``dt``, default 0.2 ms).
 
 Measurements (:class:`JointSensors`; Gaussian noise, seeded)
     * motor and link encoders: ``q_m``, ``q`` (rad) and their rates (rad/s);

@@ -10,16 +10,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba as nb
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from ..._validation import check_real
-from ...control.controllers import CompiledController
 from ...model.arm import FlexibleArm
 from ...model.joints import LinearJoint, MakkarFriction, NonlinearJoint
 from ...model.link import Link
-from ...sim.closed_loop import simulate
+from ...sim.open_loop import simulate_open_loop
 from .parameters import JointExcitation, JointSensors
 
 __all__ = ["JointMeasurements", "JointRecord", "joint_test_arm", "measure", "run_excitation"]
@@ -80,8 +78,9 @@ class JointRecord:
         The commanded torque of each hold, N m (``tau = phi(command)``).
     hold_steps : int
         Samples per hold.
-    status : str or None
-        The simulator's status.
+    status : str
+        The simulator's status (``"ok"``; a divergence raises
+        :class:`~flexarm.sim.results.SimulationError`).
     """
 
     dt: float
@@ -134,30 +133,6 @@ class JointMeasurements:
     acceleration: F64
 
 
-@nb.njit(cache=True)
-def _play(t, y, r, params, state, tau):  # type: ignore[no-untyped-def]  # pragma: no cover
-    """Open loop: ``tau = params[1 + k]`` at the ``k``-th instant ``t = k params[0]``."""
-    k = int(t / params[0] + 0.5)
-    last = params.shape[0] - 2
-    if k > last:
-        k = last
-    tau[0] = params[1 + k]
-
-
-class _Still:
-    """A reference that stays at the origin (the open-loop law ignores it)."""
-
-    corner_times: tuple[float, ...] = ()
-
-    def __init__(self, duration: float) -> None:
-        self.duration = duration
-
-    def evaluate(self, t: ArrayLike) -> tuple[F64, F64, F64]:
-        n = np.atleast_1d(np.asarray(t, dtype=np.float64)).shape[0]
-        z = np.zeros((n, 2))
-        return z, z, z
-
-
 def run_excitation(
     arm: FlexibleArm, excitation: JointExcitation, rng: np.random.Generator
 ) -> JointRecord:
@@ -165,7 +140,8 @@ def run_excitation(
 
     The commands ``u ~ U(-amplitude, amplitude)`` are drawn from ``rng``, one
     per hold (``n_holds + 1`` of them), and ``tau = drive(u)`` is held for
-    ``hold_steps`` samples.
+    ``hold_steps`` samples: :func:`flexarm.simulate_open_loop` with the samples
+    held over each period ``dt`` (zero-order hold), one RK4 step per period.
 
     Parameters
     ----------
@@ -180,8 +156,8 @@ def run_excitation(
     applied = excitation.drive(command)
     per_sample = np.repeat(applied, steps)[: n_steps + 1]
     per_sample = np.r_[per_sample, np.full(n_steps + 1 - per_sample.shape[0], applied[-1])]
-    controller = CompiledController(_play, params=np.r_[dt, per_sample], name="random-torque")
-    res = simulate(arm, controller, _Still(n_steps * dt), duration=n_steps * dt, dt=dt)
+    t = dt * np.arange(n_steps + 1)
+    res = simulate_open_loop(arm, t, per_sample[:, None], interpolation="zoh")
     m = arm.motor_slice.start
     return JointRecord(
         dt=dt,
