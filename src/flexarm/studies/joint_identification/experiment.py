@@ -154,8 +154,7 @@ def run_excitation(
     n_holds = n_steps // steps
     command = rng.uniform(-excitation.amplitude, excitation.amplitude, n_holds + 1)
     applied = excitation.drive(command)
-    per_sample = np.repeat(applied, steps)[: n_steps + 1]
-    per_sample = np.r_[per_sample, np.full(n_steps + 1 - per_sample.shape[0], applied[-1])]
+    per_sample = np.repeat(applied, steps)[: n_steps + 1]  # (n_holds + 1) steps > n_steps
     t = dt * np.arange(n_steps + 1)
     res = simulate_open_loop(arm, t, per_sample[:, None], interpolation="zoh")
     m = arm.motor_slice.start
