@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from flexarm.cli import main
+from flexarm.cli import build_parser, main
 
 
 def run(capsys, *argv):
@@ -18,14 +18,32 @@ def run(capsys, *argv):
     return status, out, err
 
 
+COMMANDS = ("reproduce", "simulate", "identify", "modes")  # api.md: the commands we promise
+
+
 def test_help_lists_every_command(capsys):
-    status, out, _ = run(capsys)
+    status, _, _ = run(capsys)
     assert status == 0
-    assert "modes" in out
     with pytest.raises(SystemExit) as exc:
         main(["--help"])
     assert exc.value.code == 0
-    assert "modes" in capsys.readouterr().out
+    listing = capsys.readouterr().out
+    rows = [line.split() for line in listing.splitlines()]
+    for name in COMMANDS:  # each starts a line of the listing
+        assert any(row[:1] == [name] for row in rows), name
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    assert set(sub.choices) == set(COMMANDS)  # nothing registered that the help omits
+    helps = {a.dest: a.help for a in sub._choices_actions}
+    flat = " ".join(listing.split())
+    assert all(helps[name] and " ".join(helps[name].split()) in flat for name in COMMANDS)
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_every_command_has_help(capsys, name):
+    with pytest.raises(SystemExit) as exc:
+        main([name, "--help"])
+    assert exc.value.code == 0
+    assert capsys.readouterr().out.startswith(f"usage: flexarm {name}")
 
 
 def test_modes_help(capsys):

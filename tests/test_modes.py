@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import functools
 import math
-import time
 
 import mpmath as mp
 import numpy as np
@@ -223,10 +222,8 @@ def test_cantilever_roots_against_mpmath_up_to_100():
     assert np.all(np.diff(roots) > 0)
 
 
-def test_cantilever_roots_300_fast_and_asymptotic():
-    t0 = time.perf_counter()
+def test_cantilever_roots_300_asymptotic():
     roots = cantilever_roots(300)
-    elapsed = time.perf_counter() - t0
     assert roots.shape == (300,)
     assert np.all(np.diff(roots) > 0)
     # For k >= 20 the root differs from (k - 1/2) pi by ~2 e**(-lam) < 1e-26: the
@@ -235,7 +232,6 @@ def test_cantilever_roots_300_fast_and_asymptotic():
     np.testing.assert_allclose(roots[19:], (k - 0.5) * np.pi, rtol=DOCUMENTED_ROOT_RTOL, atol=0)
     for kk in (150, 300):
         assert abs(roots[kk - 1] - float(_mp_cantilever_root(kk))) < 1e-10
-    assert elapsed < 10.0  # generous: a sanity bound, not a benchmark
 
 
 def test_zero_roots():

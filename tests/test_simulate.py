@@ -12,7 +12,7 @@ from flexarm.control.controllers import CompiledController, JacobianTransposePD,
 from flexarm.control.trajectories import Circle, Line, Square
 from flexarm.sensing.delays import DelayModel
 from flexarm.sensing.sensors import JointSensor, PointSensor, TipSensor, parse_sensor
-from flexarm.sim import SimulationError, loop, simulate
+from flexarm.sim import SimulationError, simulate
 from flexarm.sim.results import SimulationResult
 
 
@@ -325,8 +325,51 @@ def test_unreachable_trajectory_is_rejected(paper):
         simulate(paper, trajectory=Square(center=(8.0, 0.0), side=4.0))
 
 
-def test_loop_state_layout():
-    assert loop.OK == 0 and loop.DIVERGED == 1
+@pytest.mark.parametrize(("n_links", "n_modes"), [(1, 0), (2, 2), (3, 7)])
+def test_signal_layout_tiles_the_vectors(n_links, n_modes):
+    """Each signal has its own slice; together they cover y and r exactly once."""
+    from flexarm.control import signals as s
+
+    n = n_links
+    y_parts = [
+        (s.y_angles(n), n),
+        (s.y_rates(n), n),
+        (s.y_point(n), 2),
+        (s.y_point_rate(n), 2),
+        (s.y_modes(n), n_modes),
+    ]
+    r_parts = [
+        (s.r_position(n), 2),
+        (s.r_velocity(n), 2),
+        (s.r_acceleration(n), 2),
+        (s.r_angles(n), n),
+        (s.r_rates(n), n),
+    ]
+    for parts, size in ((y_parts, s.measurement_size(n, n_modes)), (r_parts, s.reference_size(n))):
+        cover = np.zeros(size, dtype=int)
+        for start, length in parts:
+            cover[start : start + length] += 1
+        assert np.all(cover == 1)
+
+
+def test_recorded_measurement_follows_the_layout(paper, short_square):
+    """What the loop writes at each offset is what the layout says: encoder angles and
+    rates, the tip's position and velocity (tip sensor), the modal coordinates."""
+    from flexarm.control import signals as s
+
+    res = simulate(paper, COLLOCATED, short_square, sensor=TipSensor(), duration=0.05)
+    y, n = res.measurement, 2
+    np.testing.assert_array_equal(y[:, s.y_angles(n) : s.y_angles(n) + n], res.q[:, :2])
+    np.testing.assert_array_equal(y[:, s.y_rates(n) : s.y_rates(n) + n], res.dq[:, :2])
+    np.testing.assert_allclose(y[:, s.y_point(n) : s.y_point(n) + 2], res.tip, atol=1e-12)
+    np.testing.assert_array_equal(y[:, s.y_modes(n) :], res.q[:, 2:])
+    h = 1e-6  # d tip / dt = (d tip / d q) dq, by a central difference along dq
+    tip_velocity = (
+        paper.tip_position(res.q + h * res.dq) - paper.tip_position(res.q - h * res.dq)
+    ) / (2 * h)
+    np.testing.assert_allclose(
+        y[:, s.y_point_rate(n) : s.y_point_rate(n) + 2], tip_velocity, atol=1e-7
+    )
 
 
 # ------------------------------------------------------- a point short of the tip

@@ -115,7 +115,15 @@ def _unpack_fls(p: F64, o: int) -> CompiledFuzzySystem:  # pragma: no cover - co
     o += 3
     out_range = p[o : o + 3]
     return CompiledFuzzySystem(
-        term_type, term_par, term_input, input_bounds, rule_ante, rule_cons, out_par, ops, out_range
+        term_type=term_type,
+        term_par=term_par,
+        term_input=term_input,
+        input_bounds=input_bounds,
+        rule_ante=rule_ante,
+        rule_cons=rule_cons,
+        out_par=out_par,
+        ops=ops,
+        out_range=out_range,
     )
 
 

@@ -1,0 +1,130 @@
+"""Interfaces between the layers: typed, keyword-built, lazily imported.
+
+* NamedTuples of arrays handed to compiled code are built by keyword (a swapped
+  field cannot be written silently);
+* the public signatures of the simulator, the controllers, the sensors and the
+  results name their types (no ``Any``);
+* ``import flexarm`` loads no Numba, no SciPy and no Matplotlib, and the
+  subpackages are reachable as attributes.
+"""
+
+from __future__ import annotations
+
+import ast
+import pathlib
+import subprocess
+import sys
+
+import pytest
+
+SRC = pathlib.Path(__file__).resolve().parents[1] / "src" / "flexarm"
+MODULES = sorted(p for p in SRC.rglob("*.py") if "__pycache__" not in p.parts)
+
+
+def _named_tuples() -> set[str]:
+    names = set()
+    for path in MODULES:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ClassDef) and any(
+                isinstance(b, ast.Name) and b.id == "NamedTuple" for b in node.bases
+            ):
+                names.add(node.name)
+    return names
+
+
+NAMED_TUPLES = _named_tuples()
+
+
+def test_the_named_tuples_are_found():
+    assert {"ArmArrays", "Workspace", "SensorArrays", "LoopState", "CompiledFuzzySystem"} <= (
+        NAMED_TUPLES
+    )
+
+
+@pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(SRC)))
+def test_named_tuples_are_built_by_keyword(path):
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Call):
+            f = node.func
+            name = (
+                f.id if isinstance(f, ast.Name) else f.attr if isinstance(f, ast.Attribute) else ""
+            )
+            if name in NAMED_TUPLES:
+                assert not node.args, f"{path.name}:{node.lineno}: {name}(...) built by position"
+
+
+PUBLIC = [
+    "sim/closed_loop.py",
+    "sim/open_loop.py",
+    "sim/results.py",
+    "control/controllers.py",
+    "control/adaptive.py",
+    "sensing/sensors.py",
+]
+
+
+def _annotations(fn: ast.FunctionDef) -> list[ast.expr]:
+    args = fn.args
+    every = [*args.posonlyargs, *args.args, *args.kwonlyargs, args.vararg, args.kwarg]
+    found = [a.annotation for a in every if a is not None and a.annotation is not None]
+    return [*found, fn.returns] if fn.returns is not None else found
+
+
+@pytest.mark.parametrize("module", PUBLIC)
+def test_public_signatures_have_no_any(module):
+    tree = ast.parse((SRC / module).read_text())
+    scopes = [tree, *(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name[0] != "_")]
+    bad = []
+    for scope in scopes:
+        for item in scope.body:
+            if isinstance(item, ast.FunctionDef) and not item.name.startswith("_"):
+                bad += [f"{item.name}: {ast.unparse(a)}" for a in _annotations(item)]
+            elif isinstance(item, ast.AnnAssign) and scope is not tree:
+                bad.append(f"{ast.unparse(item.target)}: {ast.unparse(item.annotation)}")
+    assert not [b for b in bad if "Any" in b.split(": ", 1)[1]], bad
+
+
+def _run(code: str) -> str:
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    return res.stdout.strip()
+
+
+def test_import_flexarm_loads_no_numba_scipy_or_matplotlib():
+    out = _run(
+        "import sys, flexarm\n"
+        "print(sorted(m for m in ('numba', 'scipy', 'matplotlib') if m in sys.modules))"
+    )
+    assert out == "[]"
+
+
+def test_subpackages_and_names_load_on_first_access():
+    out = _run(
+        "import sys, flexarm\n"
+        "assert 'flexarm.ident' not in sys.modules\n"
+        "est = flexarm.ident.SemiRecursiveKernelRegression\n"
+        "arm = flexarm.FlexibleArm.paper()\n"
+        "print(est.__name__, arm.n_dof, flexarm.simulate.__module__,"
+        " flexarm.simulate_open_loop.__module__, 'numba' in sys.modules)"
+    )
+    assert out == (
+        "SemiRecursiveKernelRegression 4 flexarm.sim.closed_loop flexarm.sim.open_loop True"
+    )
+
+
+def test_building_an_arm_needs_no_numba():
+    out = _run(
+        "import sys, flexarm\n"
+        "arm = flexarm.FlexibleArm.paper(n_modes=2)\n"
+        "arm.mass_matrix(arm.arrays.stiffness * 0)\n"
+        "print('numba' in sys.modules)"
+    )
+    assert out == "False"
+
+
+def test_dir_lists_the_lazy_names():
+    import flexarm
+
+    for name in ("FlexibleArm", "simulate", "simulate_open_loop", "ident", "sim", "model"):
+        assert name in dir(flexarm)
+    with pytest.raises(AttributeError, match="no attribute 'nonesuch'"):
+        flexarm.nonesuch  # noqa: B018
