@@ -64,10 +64,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
         print(f"{_PROG}: error: cannot write {str(out)!r}: {exc}", file=sys.stderr)
         return EXIT_FAILURE
     if args.json:
-        summary: dict[str, Any] = rep.summary()
-        summary["out"] = str(out)
-        summary["files"] = files
-        print(json.dumps(summary, indent=2))
+        print(json.dumps({**rep.summary(), "out": str(out), "files": files}, indent=2))
     else:
         print(f"{_PROG}: {rep.text()}\n  report in {out / 'report.html'}")
     return 0

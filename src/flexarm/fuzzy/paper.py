@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -12,6 +12,10 @@ from ..errors import InvalidTypeError, InvalidValueError
 from .compiled import evaluate_many
 from .sets import LeftShoulder, RightShoulder, Rule, Triangle, Variable
 from .system import DEFUZZIFIERS, FuzzySystem
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+    from matplotlib.axes import Axes
 
 __all__ = ["paper_system", "plot_surface"]
 
@@ -75,11 +79,11 @@ _PAPER_LABELS = {"delta1": "δ1 (m)", "delta2": "δ2 (m)", "lambda": "λ (-)"}
 
 def plot_surface(
     fls: FuzzySystem,
-    ax: Any = None,
+    ax: Axes | None = None,
     n: int = 101,
     *,
     labels: tuple[str, str, str] | None = None,
-) -> tuple[Any, Any]:
+) -> tuple[Axes, Artist]:
     """Draw the output of a two-input system over its input universes.
 
     Parameters
@@ -132,11 +136,12 @@ def plot_surface(
     else:
         z = evaluate_many(packed, np.column_stack([x1.ravel(), x2.ravel()])).reshape(x1.shape)
     if ax is None:
-        fig = plt.figure()
-        ax = fig.add_subplot(projection="3d")
-    if getattr(ax, "name", "") == "3d":
-        artist = ax.plot_surface(x1, x2, z, cmap="viridis")
-        ax.set_zlabel(labels[2])
+        ax = plt.figure().add_subplot(projection="3d")
+    artist: Artist
+    if ax.name == "3d":
+        ax3d = cast(Any, ax)  # mpl_toolkits' Axes3D carries no type information
+        artist = ax3d.plot_surface(x1, x2, z, cmap="viridis")
+        ax3d.set_zlabel(labels[2])
     else:
         artist = ax.contourf(x1, x2, z, levels=20, cmap="viridis")
     ax.set_xlabel(labels[0])

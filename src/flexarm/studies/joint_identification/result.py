@@ -10,12 +10,12 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._io import atomic_path
+from ..._io import JSONValue, atomic_path
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -69,7 +69,7 @@ class CurveEstimate:
         spread = float(np.ptp(self.truth))
         return self.rms_error / spread if spread > 0.0 else math.nan
 
-    def summary(self) -> dict[str, Any]:
+    def summary(self) -> dict[str, JSONValue]:
         """Error figures as a JSON-able dict."""
         return {
             "grid": [float(self.x[0]), float(self.x[-1])],
@@ -120,9 +120,9 @@ class JointIdentification:
     validation: dict[str, F64]
     fit_percent: float
     reference_fit_percent: float
-    info: dict[str, Any]
+    info: dict[str, JSONValue]
 
-    def summary(self) -> dict[str, Any]:
+    def summary(self) -> dict[str, JSONValue]:
         """Error figures and settings as a JSON-able dict."""
         return {
             "stiffness": self.stiffness.summary(),
@@ -203,7 +203,7 @@ class JointIdentification:
         )
         ax.legend(loc="upper left", fontsize="small")
         w = self.info.get("windup_width_rad")
-        if w:
+        if isinstance(w, int | float) and w:  # the soft-windup width, rad (0: none)
             inset = ax.inset_axes((0.58, 0.08, 0.38, 0.38))
             sel = np.abs(s.x) <= 3 * w
             inset.plot(1e3 * s.x[sel], s.truth[sel], "k--", lw=1)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..._io import JSONValue
 from ..._validation import check_int, check_option, check_real
 from ...errors import InvalidTypeError, InvalidValueError
 from ...ident.systems import as_generator
@@ -155,7 +156,7 @@ def identify_joint(
         validation_fraction=validation_fraction,
     )
     dt = excitation.dt
-    info = {
+    info: dict[str, JSONValue] = {
         "duration_s": excitation.n_steps * dt,
         "dt_s": dt,
         "hold_s": excitation.hold_steps * dt,

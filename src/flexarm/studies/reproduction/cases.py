@@ -6,10 +6,13 @@ defaults from here without loading the simulator.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
+
+from ..._io import JSONValue
 
 if TYPE_CHECKING:
     from ...sim.results import SimulationResult
@@ -28,6 +31,8 @@ __all__ = [
     "SENSOR_LABELS",
     "Case",
     "CaseResult",
+    "Metrics",
+    "Row",
 ]
 
 CONTROLLER_KINDS = ("pd", "fuzzy")
@@ -52,6 +57,11 @@ DEFAULT_LAW = "scaled"
 """Adaptation law of the paper's matrix (the paper's printed form)."""
 DEFAULT_TOLERANCE = 0.05
 """A run tracks well when its RMS error is at most this fraction of the square's side."""
+
+Metrics = Mapping[str, float | Sequence[float] | None]
+"""Metrics of a run by name, units in the names (:meth:`SimulationResult.metrics`)."""
+Row = dict[str, str | float | None]
+"""One row of the study's table, units in the column names."""
 
 CONTROLLER_LABELS = {"pd": "nonadaptive PD", "fuzzy": "fuzzy adaptive"}
 SENSOR_LABELS = {"joint": "joint", "tip": "end effector", "point:1:0.5": "0.5 m from elbow"}
@@ -84,7 +94,7 @@ class Case:
             return ("pd", self.sensor, self.delay)
         return (self.controller, self.sensor, self.delay, self.ks, self.law)
 
-    def scenario_dict(self, duration: float | None, dt: float) -> dict[str, Any]:
+    def scenario_dict(self, duration: float | None, dt: float) -> dict[str, JSONValue]:
         """The case in the scenario-file schema (:mod:`flexarm.sim.scenario`).
 
         Parameters
@@ -96,20 +106,20 @@ class Case:
         """
         if self.sensor.startswith("point:"):
             _, link, distance = self.sensor.split(":")
-            sensor: dict[str, Any] = {
+            sensor: dict[str, JSONValue] = {
                 "kind": "point",
                 "link": int(link),
                 "distance": float(distance),
             }
         else:
             sensor = {"kind": self.sensor}
-        controller: dict[str, Any] = {"kind": self.controller}
+        controller: dict[str, JSONValue] = {"kind": self.controller}
         if self.controller == "fuzzy":
             controller.update(ks=self.ks, law=self.law)
-        simulation: dict[str, Any] = {"dt": dt}
+        simulation: dict[str, JSONValue] = {"dt": dt}
         if duration is not None:
             simulation["duration"] = duration
-        data: dict[str, Any] = {
+        data: dict[str, JSONValue] = {
             "sensor": sensor,
             "controller": controller,
             "simulation": simulation,
@@ -139,7 +149,7 @@ class CaseResult:
     status : {"ok", "diverged"}
     diverged_at_s : float or None
         When the state diverged, s.
-    metrics : dict
+    metrics : Metrics
         :meth:`SimulationResult.metrics` of the completed run; for a diverged
         run only ``sim_time_s`` and ``wall_time_s`` (errors of a run that blew
         up are not tracking errors).
@@ -157,7 +167,7 @@ class CaseResult:
     case: Case
     status: str
     diverged_at_s: float | None
-    metrics: dict[str, Any]
+    metrics: Metrics
     delay_s: float
     max_real_pole: float
     result: SimulationResult = field(repr=False)
@@ -165,12 +175,22 @@ class CaseResult:
     @property
     def rms(self) -> float:
         """RMS tracking error, m (inf if diverged)."""
-        return float(self.metrics["rms_error_m"]) if self.status == "ok" else float("inf")
+        return float(cast(float, self.metrics["rms_error_m"])) if self.status == "ok" else np.inf
 
-    def row(self) -> dict[str, Any]:
+    def row(self) -> Row:
         """One flat, JSON-ready table row (units in the keys)."""
         m = self.metrics
-        corners = [x for x in m.get("corner_errors_m", []) if x is not None and np.isfinite(x)]
+
+        def scalar(name: str) -> float | None:
+            value = m.get(name)
+            return float(value) if isinstance(value, int | float) else None
+
+        listed = m.get("corner_errors_m")
+        corners = [
+            float(x)
+            for x in (listed if isinstance(listed, Sequence) else [])
+            if x is not None and np.isfinite(x)
+        ]
         return {
             "controller": self.case.controller,
             "law": self.case.law if self.case.controller == "fuzzy" else None,
@@ -181,12 +201,12 @@ class CaseResult:
             "status": self.status,
             "diverged_at_s": self.diverged_at_s,
             "max_real_pole_rad_s": self.max_real_pole,
-            "rms_error_m": m.get("rms_error_m"),
-            "max_error_m": m.get("max_error_m"),
+            "rms_error_m": scalar("rms_error_m"),
+            "max_error_m": scalar("max_error_m"),
             "corner_error_max_m": max(corners) if corners else None,
-            "residual_vibration_m": m.get("residual_vibration_m"),
-            "control_effort_N2m2s": m.get("control_effort_N2m2s"),
-            "max_torque_Nm": m.get("max_torque_Nm"),
-            "sim_time_s": m.get("sim_time_s"),
-            "wall_time_s": m.get("wall_time_s"),
+            "residual_vibration_m": scalar("residual_vibration_m"),
+            "control_effort_N2m2s": scalar("control_effort_N2m2s"),
+            "max_torque_Nm": scalar("max_torque_Nm"),
+            "sim_time_s": scalar("sim_time_s"),
+            "wall_time_s": scalar("wall_time_s"),
         }

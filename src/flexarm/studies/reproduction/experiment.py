@@ -27,7 +27,7 @@ from ...control.linearize import closed_loop_poles
 from ...sim.closed_loop import simulate
 from ...sim.results import SimulationError
 from ...sim.scenario import Scenario
-from .cases import CONTROLLER_KINDS, SENSOR_CASES, Case, CaseResult
+from .cases import CONTROLLER_KINDS, SENSOR_CASES, Case, CaseResult, Metrics
 
 __all__ = ["Progress", "RunMatrix", "progress_printer", "run_case", "square_side"]
 
@@ -170,7 +170,11 @@ def run_case(case: Case, duration: float | None, dt: float) -> CaseResult:
         result = simulate(scenario.arm, **scenario.simulate_kwargs(), progress=False)
     except SimulationError as exc:
         partial = exc.result
-        metrics = {"sim_time_s": float(exc.time), "wall_time_s": partial.info.get("wall_time_s")}
+        wall = partial.info.get("wall_time_s")
+        metrics: Metrics = {
+            "sim_time_s": float(exc.time),
+            "wall_time_s": float(wall) if isinstance(wall, int | float) else None,
+        }
         return CaseResult(case, "diverged", float(exc.time), metrics, delay_s, pole, partial)
     return CaseResult(case, "ok", None, result.metrics(), delay_s, pole, result)
 

@@ -17,19 +17,20 @@ import os
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, TypedDict
 
 import numpy as np
 
-from ..._io import json_ready, output_directory
+from ..._io import JSONValue, json_ready, output_directory
 from .cases import CONTROLLER_KINDS, CONTROLLER_LABELS, SENSOR_CASES, SENSOR_LABELS, CaseResult
 from .verdicts import Claim
 
 if TYPE_CHECKING:
+    from matplotlib.artist import Artist
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["FIGURE_SIZE", "OUTPUT_FILES", "Reproduction"]
+__all__ = ["FIGURE_SIZE", "OUTPUT_FILES", "Reproduction", "Settings"]
 
 OUTPUT_FILES = (
     "summary.json",
@@ -61,6 +62,24 @@ _TABLE_COLUMNS = (
 )
 
 
+class Settings(TypedDict):
+    """The parameters of :func:`~flexarm.studies.reproduction.reproduce`, units in the keys."""
+
+    duration_s: float | None
+    dt_s: float
+    ks: float
+    law: str
+    ks_range: list[float]
+    laws: list[str]
+    delays: list[str]
+    sensitivity: bool
+    tolerance: float
+    square_side_m: float
+    tolerance_m: float
+    runs: int
+    wall_time_s: float
+
+
 @dataclass
 class Reproduction:
     """Everything :func:`~flexarm.studies.reproduction.reproduce` found.
@@ -77,7 +96,7 @@ class Reproduction:
         One verdict per claim of the paper: ``claim``, ``verdict``
         ("supported", "partly supported", "not supported") and ``evidence``
         (:mod:`~flexarm.studies.reproduction.verdicts`).
-    settings : dict
+    settings : Settings
         The study's parameters (units in the keys).
     """
 
@@ -85,11 +104,11 @@ class Reproduction:
     delay_study: list[CaseResult]
     ks_study: list[CaseResult]
     claims: list[Claim]
-    settings: dict[str, Any]
+    settings: Settings
 
-    def summary(self) -> dict[str, Any]:
+    def summary(self) -> dict[str, JSONValue]:
         """The JSON summary (what ``flexarm reproduce --json`` prints)."""
-        summary: dict[str, Any] = json_ready(
+        summary: dict[str, JSONValue] = json_ready(
             {
                 "cases": [c.row() for c in self.cases],
                 "claims": self.claims,
@@ -230,7 +249,7 @@ class Reproduction:
         fig.axes[0].legend(fontsize=8)
         return fig
 
-    def plot_surface(self, ax: Axes | None = None) -> tuple[Axes, Any]:
+    def plot_surface(self, ax: Axes | None = None) -> tuple[Axes, Artist]:
         """The paper's fuzzy surface λ(δ1, δ2) (:func:`flexarm.fuzzy.plot_surface`).
 
         Parameters
@@ -344,7 +363,7 @@ def _panel_title(c: CaseResult) -> str:
     return f"{head}\nRMS {c.metrics['rms_error_m']:.3g} m"
 
 
-def _settings_text(s: dict[str, Any]) -> str:
+def _settings_text(s: Settings) -> str:
     dur = "the full square" if s["duration_s"] is None else f"{s['duration_s']:g} s"
     return (
         f"The paper's arm (two 4.5 m links, one mode each) on the default square ({dur}), "

@@ -18,7 +18,7 @@ from .cases import (
     DELAY_CASES,
 )
 from .experiment import Progress, RunMatrix, progress_printer, square_side
-from .report import Reproduction
+from .report import Reproduction, Settings
 from .verdicts import claims
 
 __all__ = ["reproduce"]
@@ -107,20 +107,20 @@ def reproduce(
     wall = time.perf_counter() - start
 
     side = square_side()
-    settings = {
-        "duration_s": duration,
-        "dt_s": dt,
-        "ks": ks,
-        "law": law,
-        "ks_range": list(ks_values),
-        "laws": list(law_values),
-        "delays": list(delay_values),
-        "sensitivity": sensitivity,
-        "tolerance": tolerance,
-        "square_side_m": side,
-        "tolerance_m": tolerance * side,
-        "runs": len(runs.unique()),
-        "wall_time_s": wall,
-    }
+    settings = Settings(
+        duration_s=duration,
+        dt_s=dt,
+        ks=ks,
+        law=law,
+        ks_range=list(ks_values),
+        laws=list(law_values),
+        delays=list(delay_values),
+        sensitivity=sensitivity,
+        tolerance=tolerance,
+        square_side_m=side,
+        tolerance_m=tolerance * side,
+        runs=len(runs.unique()),
+        wall_time_s=wall,
+    )
     verdicts = claims(cases, ks_study, tolerance * side)
     return Reproduction(cases, delay_study, ks_study, verdicts, settings)
