@@ -37,7 +37,7 @@ from ..control.signals import (
 )
 from ..control.trajectories import ELBOWS, Trajectory, check_trajectory, evaluation_times
 from ..errors import InvalidValueError
-from ..model.kinematics import lever_lengths, rigid_jacobian, rigid_point
+from ..model.kinematics import lever_lengths, rigid_point
 
 __all__ = ["ReferenceSignals", "joint_path", "joint_reference", "reference_signals"]
 
@@ -137,10 +137,14 @@ def joint_path(
             f"The 'trajectory' parameter of {owner} must stay inside the arm's workspace. {exc}"
         ) from exc
     lengths = np.asarray(arm.link_lengths, dtype=float)
-    jac = rigid_jacobian(lengths, theta)
-    (a, b), (c, d) = jac[:, 0].T, jac[:, 1].T
+    l1, l2 = lengths
+    phi1 = theta[:, 0]
+    phi2 = phi1 + theta[:, 1]
+    s1, c1, s2, c2 = np.sin(phi1), np.cos(phi1), np.sin(phi2), np.cos(phi2)
+    a, b = -l1 * s1 - l2 * s2, -l2 * s2  # the rigid Jacobian [[a, b], [c, d]]
+    c, d = l1 * c1 + l2 * c2, l2 * c2
     det = a * d - b * c
-    near = np.abs(det) / (lengths[0] * lengths[1])
+    near = np.abs(det) / (l1 * l2)
     if np.any(near < singularity_tol):
         k = int(np.argmax(near < singularity_tol))
         when = f"t = {times[k]} s, at " if times is not None else ""
@@ -158,11 +162,8 @@ def joint_path(
     dtheta = solve(velocity)
     if acceleration is None:
         return theta, dtheta, None
-    phi = np.cumsum(theta, axis=1)
-    weight = lengths * np.cumsum(dtheta, axis=1) ** 2
-    jdot_dtheta = -np.stack(
-        [np.sum(weight * np.cos(phi), axis=1), np.sum(weight * np.sin(phi), axis=1)], axis=1
-    )
+    w1, w2 = l1 * dtheta[:, 0] ** 2, l2 * (dtheta[:, 0] + dtheta[:, 1]) ** 2
+    jdot_dtheta = -np.stack([w1 * c1 + w2 * c2, w1 * s1 + w2 * s2], axis=1)
     return theta, dtheta, solve(acceleration - jdot_dtheta)
 
 
