@@ -40,13 +40,22 @@ WITHIN: dict[str, list[str]] = {
     "sim": ["metrics", "results", "loop", "simulate", "scenario"],
     "fuzzy": ["sets", "compiled", "system", "paper"],
     "ident": [
+        "options",
         "_params",
+        "bandwidth",
+        "data",
         "kernels",
         "binning",
         "systems",
+        "accumulators",
+        "_setup",
         "regression",
+        "arma",
+        "correlation",
+        "lags",
         "hammerstein",
         "convergence",
+        "fits",
     ],
 }
 
