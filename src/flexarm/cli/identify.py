@@ -206,7 +206,7 @@ output: with --out DIR, study.csv (n,mise,std), study.png and summary.json.
 """
 
 
-def _add_estimator_options(p: argparse.ArgumentParser) -> None:
+def _add_estimator_options(p: argparse.ArgumentParser, decay: str) -> None:
     p.add_argument("--kernel", choices=KERNELS, help="kernel (default gaussian)")
     p.add_argument(
         "--bandwidth",
@@ -214,7 +214,7 @@ def _add_estimator_options(p: argparse.ArgumentParser) -> None:
         metavar="H|silverman",
         help="h_1 in units of x, or a rule (default silverman)",
     )
-    p.add_argument("--decay", type=float, metavar="D", help="h_i = h_1 i^-D")
+    p.add_argument("--decay", type=float, metavar="D", help=f"h_i = h_1 i^-D (default {decay})")
 
 
 def _add_output_options(p: argparse.ArgumentParser) -> None:
@@ -250,7 +250,7 @@ def add_parser(sub: Any) -> None:
     fit.add_argument("data", metavar="DATA", help="data file (.csv, .npz or text)")
     fit.add_argument("--x", metavar="COL", default="0", help="input column (default 0)")
     fit.add_argument("--y", metavar="COL", default="1", help="output column (default 1)")
-    _add_estimator_options(fit)
+    _add_estimator_options(fit, "0.2")
     fit.add_argument("--grid", type=positive_int(2), metavar="N", help="grid points (512)")
     fit.add_argument(
         "--binned",
@@ -287,7 +287,7 @@ def add_parser(sub: Any) -> None:
     study.add_argument("--seed", type=int, default=0, metavar="S", help="seed (default 0)")
     study.add_argument("--noise", type=float, metavar="SIGMA", help="noise std (default 0.1)")
     study.add_argument("--distribution", choices=DISTRIBUTIONS, help="inputs (default uniform)")
-    _add_estimator_options(study)
+    _add_estimator_options(study, "1/(2p+1)")
     _add_output_options(study)
     study.set_defaults(func=_cmd_study)
 

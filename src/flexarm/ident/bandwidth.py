@@ -144,6 +144,11 @@ class Silverman:
         object.__setattr__(self, "factor", factor)
 
     @property
+    def name(self) -> str:
+        """The rule's name in :data:`BANDWIDTH_RULES`: ``"silverman"``."""
+        return "silverman"
+
+    @property
     def label(self) -> str:
         """``"silverman"``, or ``"silverman x c"`` for a multiple ``c`` of the rule."""
         return "silverman" if self.factor == 1.0 else f"silverman x {self.factor:g}"

@@ -235,7 +235,7 @@ def read_xy(
         first = int(np.argmax(bad))
         raise DataError(
             f"{where}: {dropped} row(s) have NaN or empty cells in the chosen columns (the "
-            f"first is data row {first + 1}); pass --drop-nan to drop them"
+            f"first is data row {first + 1}); drop_nan=True (--drop-nan) drops them"
         )
     xs, ys = xs[~bad], ys[~bad]
     if not (np.all(np.isfinite(xs)) and np.all(np.isfinite(ys))):

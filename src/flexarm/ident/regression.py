@@ -67,7 +67,7 @@ from ..errors import InvalidTypeError, InvalidValueError
 from ._params import HyperParameters, same_value
 from ._setup import check_X, check_Xy, smoothing
 from .accumulators import Accumulator, BinnedSums, ExactSamples, GridAccumulator, State, choose
-from .bandwidth import Silverman
+from .bandwidth import Silverman, as_rule
 from .kernels import KernelFunction
 
 __all__ = [
@@ -104,9 +104,17 @@ class _KernelRegression(HyperParameters):
     # ---------------------------------------------------------------- fitting
 
     def _start(
-        self, X: F64 | None = None, d: int | None = None, bandwidth: F64 | None = None
+        self,
+        X: F64 | None = None,
+        d: int | None = None,
+        bandwidth: F64 | None = None,
+        state: Mapping[str, NDArray[Any]] | None = None,
     ) -> None:
-        """Validate the hyperparameters (on the first samples ``X``) and set up the state."""
+        """Validate the hyperparameters (on the first samples ``X``) and set up the state.
+
+        To restore a saved estimator give ``d``, the resolved ``bandwidth`` and
+        the accumulator's ``state`` instead of ``X``.
+        """
         setup = smoothing(
             self.get_params(),
             self._owner,
@@ -120,7 +128,8 @@ class _KernelRegression(HyperParameters):
             k: copy.deepcopy(v) if isinstance(v, np.ndarray | list | tuple) else v
             for k, v in self.get_params().items()
         }
-        self._acc: Accumulator = choose(setup)(setup)
+        kind = choose(setup)
+        self._acc: Accumulator = kind(setup) if state is None else kind.from_state(setup, state)
 
     def _check_fitted(self) -> Accumulator:
         acc: Accumulator | None = self.__dict__.get("_acc")
@@ -361,21 +370,22 @@ class _KernelRegression(HyperParameters):
                 f"The 'kernel' parameter of {self._owner} must be a kernel name to save the "
                 f"estimator. Got {setup.kernel!r} instead."
             )
+        given = self._frozen["bandwidth"]
+        rule = as_rule(given, self._owner)
         state: State = {
             "format": np.array(_FORMAT),
             "estimator": np.array(self._owner),
             "kernel": np.array(setup.kernel),
-            "bandwidth": np.asarray(self._frozen["bandwidth"], dtype=np.float64)
-            if not isinstance(self._frozen["bandwidth"], str | Silverman)
-            else setup.bandwidth,
+            # the value given, or the rule's value (with the rule's name and factor below)
+            "bandwidth": setup.bandwidth
+            if rule is not None
+            else np.asarray(given, dtype=np.float64),
             "decay": np.array(setup.decay),
             "n_features_in": np.array(setup.d),
             "series": np.array(setup.series),
         }
-        rule = self._frozen["bandwidth"]
-        if isinstance(rule, str | Silverman):
-            factor = rule.factor if isinstance(rule, Silverman) else 1.0
-            state.update(bandwidth_rule=np.array("silverman"), bandwidth_factor=np.array(factor))
+        if rule is not None:
+            state.update(bandwidth_rule=np.array(rule.name), bandwidth_factor=np.array(rule.factor))
         if setup.grid is not None:
             state["grid"] = setup.grid
         if setup.binned is not None:
@@ -407,8 +417,8 @@ class _KernelRegression(HyperParameters):
             kwargs["series"] = True
         est = cls(**kwargs)
         d = int(data["n_features_in"])
-        est._start(d=d, bandwidth=np.broadcast_to(np.asarray(bw, dtype=np.float64), (d,)))
-        est._acc = type(est._acc).from_state(est._acc.setup, data)
+        h1 = np.broadcast_to(np.asarray(bw, dtype=np.float64), (d,))
+        est._start(d=d, bandwidth=h1, state=data)
         return est
 
     def save(self, path: str | os.PathLike[str]) -> None:
