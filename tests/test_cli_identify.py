@@ -1,5 +1,7 @@
-"""``flexarm identify``: reading CSV / text / .npz columns, the fit and the study outputs,
-and one-line errors with status 2 and nothing written."""
+"""``flexarm identify fit`` and ``flexarm identify study``: the fit and the study outputs,
+one-line errors with status 2 and nothing written, and bugs that stay bugs.
+
+Reading the data files is :mod:`flexarm.ident.data` (tests/test_ident_data.py)."""
 
 from __future__ import annotations
 
@@ -8,8 +10,9 @@ import json
 import numpy as np
 import pytest
 
+import flexarm.ident.convergence
+import flexarm.ident.fits
 from flexarm.cli import main
-from flexarm.cli.identify import DataError, default_bandwidth, load_columns
 from flexarm.ident import SemiRecursiveKernelRegression
 
 N = 400
@@ -81,68 +84,13 @@ def files(tmp_path, samples):
     return {"csv": csv, "txt": txt, "npz": npz, "table": table}
 
 
-# ------------------------------------------------------------------ reading
-
-
-def test_load_columns_all_formats(files, samples):
-    x, y = samples
-    for path, cols in [
-        (files["csv"], ["u", "w"]),
-        (files["csv"], ["1", "2"]),
-        (files["csv"], [1, "w"]),
-        (files["txt"], ["0", "1"]),
-        (files["npz"], ["u", "w"]),
-        (files["npz"], [0, 1]),
-        (files["table"], [1, 2]),
-    ]:
-        a, b = load_columns(path, cols)
-        np.testing.assert_array_equal(a, x)
-        np.testing.assert_array_equal(b, y)
-
-
-def test_load_columns_empty_cells_are_nan(tmp_path):
-    p = tmp_path / "n.csv"
-    p.write_text("a,b,c\n1,2,x\n3,,y\nnan,4,z\n")
-    a, b = load_columns(p, ["a", "b"])  # column c is not numeric, and not asked for
-    np.testing.assert_array_equal(np.isnan(a), [False, False, True])
-    np.testing.assert_array_equal(np.isnan(b), [False, True, False])
-
-
-@pytest.mark.parametrize(
-    ("text", "suffix", "cols", "match"),
-    [
-        ("a,b\n1,2\n3\n", ".csv", ["a", "b"], "line 3: 1 field"),
-        ("a,b\n1,2\n3,oops\n", ".csv", ["a", "b"], "line 3, column 'b': 'oops' is not a number"),
-        ("a,b\n1,2\n", ".csv", ["a", "c"], "no column named 'c' \\(columns: a, b\\)"),
-        ("1 2\n3 4\n", ".txt", ["0", "5"], "column index 5 is out of range"),
-        ("1 2\n3 4\n", ".txt", ["x", "1"], "no column named 'x' \\(the file has no header\\)"),
-        ("a,b\n", ".csv", ["a", "b"], "header but no data rows"),
-        ("\n\n", ".txt", ["0", "1"], "holds no data"),
-        ("not a zip", ".npz", ["0", "1"], "not a readable .npz"),
-    ],
-)
-def test_load_columns_errors(tmp_path, text, suffix, cols, match):
-    p = tmp_path / f"bad{suffix}"
-    p.write_text(text)
-    with pytest.raises(DataError, match=match):
-        load_columns(p, cols)
-
-
-def test_default_bandwidth_is_silverman_at_the_last_sample(samples):
-    x, _ = samples
-    q75, q25 = np.percentile(x, [75, 25])
-    silverman = 0.9 * min(np.std(x, ddof=1), (q75 - q25) / 1.34) * N ** (-0.2)
-    for decay in (0.0, 0.2, 0.5):
-        h1 = default_bandwidth(x, decay)
-        assert h1 * N ** (-decay) == pytest.approx(silverman, rel=1e-12)
-
-
 # ------------------------------------------------------------------ fitting
 
 
 def test_json_summary_and_estimate(capsys, files, samples):
     x, y = samples
-    status, out, err = run(capsys, files["csv"], "--x", "u", "--y", "w", "--json", "--grid", 64)
+    argv = ["fit", files["csv"], "--x", "u", "--y", "w", "--json", "--grid", 64]
+    status, out, err = run(capsys, *argv)
     assert status == 0, err
     s = strict_json(out)
     assert set(s) == FIT_KEYS
@@ -163,7 +111,7 @@ def test_formats_and_columns_give_the_same_estimate(capsys, files):
         [files["npz"], "--x", "u", "--y", "w"],
         [files["table"], "--x", "1", "--y", "2"],
     ):
-        status, out, err = run(capsys, *argv, "--json", "--grid", 32, "--bandwidth", 0.3)
+        status, out, err = run(capsys, "fit", *argv, "--json", "--grid", 32, "--bandwidth", 0.3)
         assert status == 0, err
         results.append(strict_json(out)["estimate"]["m"])
     for r in results[1:]:
@@ -174,6 +122,7 @@ def test_out_writes_csv_png_and_summary(capsys, files, tmp_path):
     out_dir = tmp_path / "res"
     status, out, err = run(
         capsys,
+        "fit",
         files["npz"],
         "--x",
         "u",
@@ -198,14 +147,14 @@ def test_out_writes_csv_png_and_summary(capsys, files, tmp_path):
 
 
 def test_series_equals_direct_sums(capsys, files):
-    argv = [files["npz"], "--x", "u", "--y", "w", "--json", "--decay", 0, "--grid", 40]
+    argv = ["fit", files["npz"], "--x", "u", "--y", "w", "--json", "--decay", 0, "--grid", 40]
     _, out, _ = run(capsys, *argv)
     status, out_series, err = run(capsys, *argv, "--series")
     assert status == 0, err
     direct, series = strict_json(out)["estimate"]["m"], strict_json(out_series)["estimate"]["m"]
     assert strict_json(out_series)["series"] is True
     np.testing.assert_allclose(series, direct, rtol=1e-12)
-    status, _, err = run(capsys, files["npz"], "--series")  # decay 0.2: refused
+    status, _, err = run(capsys, "fit", files["npz"], "--series")  # decay 0.2: refused
     assert status == 2 and "'series'" in err
 
 
@@ -216,13 +165,16 @@ def test_drop_nan_reports_the_count(capsys, tmp_path, samples):
     rows[3] = f"{float(x[3])!r},"
     rows[10] = f"nan,{float(y[10])!r}"
     p.write_text("u,w\n" + "\n".join(rows) + "\n")
-    status, out, err = run(capsys, p, "--drop-nan", "--json", "--grid", 16)
+    status, out, err = run(capsys, "fit", p, "--drop-nan", "--json", "--grid", 16)
     assert status == 0, err
     s = strict_json(out)
     assert s["dropped_nan_rows"] == 2 and s["n_samples"] == N - 2
 
 
 # ------------------------------------------------------------------ errors
+
+
+GOOD = "u,w\n1,2\n2,3\n"
 
 
 def bad_file(tmp_path, name, text):
@@ -244,8 +196,14 @@ def bad_file(tmp_path, name, text):
         (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,3\n"), ["--decay", "3"], "'decay'"),
         (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,3\n"), ["--binned", "0.9"], "'binned'"),
         (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,3\n"), ["--grid", "1"], "--grid"),
-        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,3\n"), ["--study"], "not both"),
-        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,3\n"), ["--seed", "1"], "--study only"),
+        # options of the other subcommands are unknown here: no conflict table needed
+        (lambda d: bad_file(d, "a.csv", GOOD), ["--study"], "unrecognized.*--study"),
+        (lambda d: bad_file(d, "a.csv", GOOD), ["--seed", "1"], "unrecognized.*--seed"),
+        (lambda d: bad_file(d, "a.csv", GOOD), ["--lags", "5"], "unrecognized.*--lags"),
+        (lambda d: bad_file(d, "a.csv", "u,w\n1,1\n1,3\n"), [], "'x' parameter.*must vary"),
+        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n2,inf\n"), [], "infinite"),
+        (lambda d: bad_file(d, "a.csv", "u,w\n1,2\n"), [], "at least 2 data rows"),
+        (lambda d: bad_file(d, "a.csv", GOOD), ["--bandwidth", "scott"], "--bandwidth"),
         (lambda d: bad_file(d, "a.npz", "zzz"), [], "not a readable .npz"),
         (lambda d: bad_file(d, "a.txt", "1 2\n3\n"), [], "line 2: 1 field"),
     ],
@@ -256,11 +214,11 @@ def test_errors_are_one_line_with_status_2_and_nothing_written(
     data = make(tmp_path)
     out_dir = tmp_path / "out"
     before = sorted(p.name for p in tmp_path.iterdir())
-    status, out, err = run(capsys, data, "--out", out_dir, *extra)
+    status, out, err = run(capsys, "fit", data, "--out", out_dir, *extra)
     assert status == 2
     assert out == ""
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
-    assert err.startswith("flexarm identify: error:")
+    assert err.startswith("flexarm identify fit: error:")
     assert pytest.importorskip("re").search(match, err), err
     assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written
 
@@ -269,13 +227,15 @@ def test_out_not_empty_is_refused(capsys, tmp_path, files):
     out_dir = tmp_path / "full"
     out_dir.mkdir()
     (out_dir / "keep.txt").write_text("mine")
-    status, _, err = run(capsys, files["csv"], "--out", out_dir)
+    status, _, err = run(capsys, "fit", files["csv"], "--out", out_dir)
     assert status == 2 and "not an empty directory" in err
     assert [p.name for p in out_dir.iterdir()] == ["keep.txt"]
 
 
-def test_no_data_and_no_study_is_an_error(capsys):
+def test_no_subcommand_or_no_data_is_an_error(capsys):
     status, _, err = run(capsys)
+    assert status == 2 and "fit,study,hammerstein" in err and len(err.strip().splitlines()) == 1
+    status, _, err = run(capsys, "fit")
     assert status == 2 and "DATA" in err and len(err.strip().splitlines()) == 1
 
 
@@ -283,7 +243,7 @@ def test_no_data_and_no_study_is_an_error(capsys):
 
 
 def test_study_json_and_out(capsys, tmp_path):
-    argv = ["--study", "--n-min", 100, "--n-max", 800, "--n-steps", 3, "--repetitions", 3]
+    argv = ["study", "--n-min", 100, "--n-max", 800, "--n-steps", 3, "--repetitions", 3]
     status, out, err = run(capsys, *argv, "--seed", 5, "--json")
     assert status == 0, err
     s = strict_json(out)
@@ -303,9 +263,77 @@ def test_study_json_and_out(capsys, tmp_path):
 
 
 def test_study_bad_options(capsys, tmp_path):
-    status, _, err = run(capsys, "--study", "--n-min", 500, "--n-max", 100)
-    assert status == 2 and "--n-min < --n-max" in err
-    status, _, err = run(capsys, "--study", "--function", "cosine")
+    status, _, err = run(capsys, "study", "--n-min", 500, "--n-max", 100)
+    assert status == 2 and "'n_min'" in err and "n_max" in err
+    status, _, err = run(capsys, "study", "--function", "cosine")
     assert status == 2 and "--function" in err
-    status, _, err = run(capsys, "--study", "--x", "u")
-    assert status == 2 and "applies to DATA" in err
+    status, _, err = run(capsys, "study", "--x", "u")
+    assert status == 2 and "unrecognized arguments: --x" in err
+
+
+@pytest.mark.parametrize(
+    ("extra", "match"),
+    [
+        (["--n-min", "500", "--n-max", "100"], "'n_min'"),
+        (["--n-steps", "1"], "--n-steps"),
+        (["--repetitions", "1"], "--repetitions"),
+        (["--noise", "-1"], "'noise'"),
+        (["--bandwidth", "0"], "'bandwidth'"),
+        (["--decay", "-0.5"], "'decay'"),
+        (["--kernel", "cosine"], "--kernel"),
+        (["--distribution", "cauchy"], "--distribution"),
+        (["--grid", "10"], "unrecognized arguments: --grid"),
+        (["data.csv"], "unrecognized arguments: data.csv"),
+    ],
+)
+def test_study_errors_are_one_line_with_status_2_and_nothing_written(
+    capsys, tmp_path, extra, match
+):
+    out_dir = tmp_path / "out"
+    argv = ["study", "--n-min", 20, "--n-max", 40, "--repetitions", 2, *extra]
+    status, out, err = run(capsys, *argv, "--out", out_dir)
+    assert status == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert pytest.importorskip("re").search(match, err), err
+    assert not out_dir.exists()
+
+
+def test_fit_files_hold_what_the_summary_says(capsys, files, tmp_path):
+    out_dir = tmp_path / "res"
+    argv = ["fit", files["csv"], "--x", "u", "--y", "w", "--grid", 30, "--out", out_dir]
+    status, out, err = run(capsys, *argv, "--json")
+    assert status == 0, err
+    s = strict_json(out)
+    assert strict_json((out_dir / "summary.json").read_text()) == s
+    table = np.loadtxt(out_dir / "estimate.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(table[:, 0], s["estimate"]["x"], rtol=1e-11)
+    np.testing.assert_allclose(table[:, 1], s["estimate"]["m"], rtol=1e-11)
+    assert sorted(s["files"]) == sorted(p.name for p in out_dir.iterdir())
+
+
+def _bug(*args, **kwargs):
+    raise ValueError("a bug inside the library, not bad input")
+
+
+@pytest.mark.parametrize(
+    ("module", "name", "argv"),
+    [
+        (flexarm.ident.fits, "fit_regression", ["fit", "{csv}"]),
+        (flexarm.ident.fits, "fit_hammerstein", ["hammerstein", "{csv}"]),
+        (flexarm.ident.convergence, "convergence_study", ["study"]),
+    ],
+)
+def test_a_plain_value_error_is_a_bug_not_exit_2(monkeypatch, files, module, name, argv):
+    """Only flexarm's own validation errors become exit status 2; anything else propagates
+    (and shows its traceback) so that a library bug cannot pass for bad input."""
+    monkeypatch.setattr(module, name, _bug)
+    with pytest.raises(ValueError, match="a bug inside the library"):
+        main(["identify", *(a.format(csv=files["csv"]) for a in argv)])
+
+
+def test_a_plain_value_error_while_reading_is_a_bug(monkeypatch, files):
+    import flexarm.ident.data
+
+    monkeypatch.setattr(flexarm.ident.data, "load_columns", _bug)
+    with pytest.raises(ValueError, match="a bug inside the library"):
+        main(["identify", "fit", str(files["csv"])])

@@ -38,8 +38,36 @@ def test_quantizer_converges_slower_than_smooth(smooth):
 
 
 def test_mise_matches_a_direct_computation():
-    """One repetition's ISE recomputed by hand: same draws, eq. 14 by NumPy, trapezoid."""
+    """One repetition's ISE recomputed by hand: same draws, Silverman's h_1 for the last
+    sample, eq. 14 by NumPy, trapezoid."""
     res = convergence_study("deadzone", n=[50, 120], repetitions=2, rng=11, grid=41)
+    rng = np.random.default_rng(11)
+    x = np.linspace(-0.5, 0.5, 41)
+    m = FUNCTIONS["deadzone"][0]
+    ises = []
+    for _ in range(2):
+        X = rng.uniform(-1, 1, 120)
+        y = m(X) + 0.1 * rng.standard_normal(120)
+        q75, q25 = np.percentile(X, [75, 25])
+        h120 = 0.9 * min(np.std(X, ddof=1), (q75 - q25) / 1.34) * 120 ** (-1 / 5)  # Silverman
+        h1 = h120 * 120 ** (1 / 3)  # decay 1/3 (p = 1): h_120 is the rule's
+        row = []
+        for n in (50, 120):
+            h = h1 * np.arange(1, n + 1) ** (-1 / 3)
+            K = np.exp(-0.5 * ((x[:, None] - X[None, :n]) / h[None, :]) ** 2)
+            err = (K @ y[:n]) / K.sum(axis=1) - m(x)
+            row.append(np.trapezoid(err**2, x))
+        ises.append(row)
+    ises = np.array(ises)
+    np.testing.assert_allclose(res.mise, ises.mean(axis=0), rtol=1e-10)
+    np.testing.assert_allclose(res.std, ises.std(axis=0, ddof=1), rtol=1e-8)
+    assert res.settings["decay"] == pytest.approx(1 / 3)
+    assert res.settings["bandwidth"] == "silverman" and len(res.settings["h1"]) == 2
+
+
+def test_fixed_bandwidth_matches_a_direct_computation():
+    """A number fixes h_1 for every repetition (the study's earlier default, 0.3)."""
+    res = convergence_study("deadzone", n=[50, 120], repetitions=2, rng=11, grid=41, bandwidth=0.3)
     rng = np.random.default_rng(11)
     x = np.linspace(-0.5, 0.5, 41)
     m = FUNCTIONS["deadzone"][0]
@@ -54,10 +82,8 @@ def test_mise_matches_a_direct_computation():
             err = (K @ y[:n]) / K.sum(axis=1) - m(x)
             row.append(np.trapezoid(err**2, x))
         ises.append(row)
-    ises = np.array(ises)
-    np.testing.assert_allclose(res.mise, ises.mean(axis=0), rtol=1e-10)
-    np.testing.assert_allclose(res.std, ises.std(axis=0, ddof=1), rtol=1e-8)
-    assert res.settings["decay"] == pytest.approx(1 / 3)
+    np.testing.assert_allclose(res.mise, np.mean(ises, axis=0), rtol=1e-10)
+    assert res.settings["bandwidth"] == 0.3 and res.settings["h1"] == [0.3, 0.3]
 
 
 def test_seeded_reproducibility():

@@ -353,7 +353,8 @@ GOOD_Y = np.convolve(GOOD_U, [1.0, 0.5])[:1000]
         ({"order": 30}, GOOD_U, GOOD_Y, ValueError, "'n_lags' parameter .* >= 2 \\* order"),
         ({"kernel": "cosine"}, GOOD_U, GOOD_Y, ValueError, "'kernel' parameter"),
         ({"bandwidth": -1.0}, GOOD_U, GOOD_Y, ValueError, "'bandwidth' parameter .* > 0"),
-        ({"bandwidth": "silverman"}, GOOD_U, GOOD_Y, ValueError, "'bandwidth' parameter"),
+        ({"bandwidth": "scott"}, GOOD_U, GOOD_Y, ValueError, "'bandwidth' parameter.*silverman"),
+        ({"bandwidth": None}, GOOD_U, GOOD_Y, TypeError, "'bandwidth' parameter"),
         ({"decay": 2.0}, GOOD_U, GOOD_Y, ValueError, "'decay' parameter .* <= 1"),
         ({"n_lags": 0}, GOOD_U, GOOD_Y, ValueError, "'n_lags' parameter .* >= 1"),
         ({"n_lags": 2.5}, GOOD_U, GOOD_Y, TypeError, "'n_lags' parameter .* integer"),
@@ -365,3 +366,40 @@ GOOD_Y = np.convolve(GOOD_U, [1.0, 0.5])[:1000]
 def test_bad_input_rejected(kwargs, u, y, exc, match):
     with pytest.raises(exc, match=match):
         HammersteinIdentifier(**kwargs).fit(u, y)
+
+
+@pytest.mark.parametrize("stop", [100, 255, 256, 3001], ids=lambda n: f"after{n}")
+def test_save_load_resumes_bit_for_bit(tmp_path, stop):
+    """Saved during the warmup (100, 255 samples) or after it, resumed from the file: the
+    same model as never stopping (the lag regressions go through their state description)."""
+    phi, arma = PHIS["saturation"], EXAMPLE_ARMA["order2"]
+    u, y = hammerstein_data(phi, arma, 6000, seed=9)
+    kw = {"n_lags": 20, "known_points": ((0.0, 0.0), (1.5, float(phi(1.5)))), "order": "aic"}
+    never_stopped = HammersteinIdentifier(**kw).fit(u, y)
+    first = HammersteinIdentifier(**kw).partial_fit(u[:stop], y[:stop])
+    first.save(tmp_path / "h.npz")
+    resumed = HammersteinIdentifier.load(tmp_path / "h.npz")
+    assert resumed.get_params() == first.get_params() and resumed.n_samples_ == stop
+    resumed.partial_fit(u[stop:], y[stop:])
+    for name in ("impulse_response_", "nonlinearity_", "grid_", "singular_values_"):
+        np.testing.assert_array_equal(getattr(resumed, name), getattr(never_stopped, name))
+    assert resumed.arma_ == never_stopped.arma_ and resumed.offset_ == never_stopped.offset_
+    assert resumed.bandwidth_ == never_stopped.bandwidth_
+
+
+def test_save_load_keeps_a_bandwidth_rule_and_refuses_other_files(tmp_path):
+    from flexarm.ident import Silverman
+
+    u, y = hammerstein_data(PHIS["quantizer"], EXAMPLE_ARMA["order1"], 2000, seed=2)
+    est = HammersteinIdentifier(n_lags=12, bandwidth=Silverman(0.4)).fit(u, y)
+    est.save(tmp_path / "h.npz")
+    back = HammersteinIdentifier.load(tmp_path / "h.npz")
+    assert back.bandwidth == Silverman(0.4) and back.bandwidth_ == est.bandwidth_
+    np.testing.assert_array_equal(back.predict(u[:50]), est.predict(u[:50]))
+    with pytest.raises(NotFittedError):
+        HammersteinIdentifier().save(tmp_path / "none.npz")
+    from flexarm.ident import SemiRecursiveKernelRegression
+
+    SemiRecursiveKernelRegression().fit(u, y).save(tmp_path / "other.npz")
+    with pytest.raises(ValueError, match=r"'path'.*HammersteinIdentifier\.save"):
+        HammersteinIdentifier.load(tmp_path / "other.npz")

@@ -358,7 +358,9 @@ X2, Y2 = data(20, 2)
     [
         ({"bandwidth": 0.0}, X1, Y1, ValueError, "'bandwidth'.*> 0"),
         ({"bandwidth": float("nan")}, X1, Y1, ValueError, "'bandwidth'.*finite"),
-        ({"bandwidth": "wide"}, X1, Y1, TypeError, "'bandwidth'"),
+        ({"bandwidth": None}, X1, Y1, TypeError, "'bandwidth'"),
+        # a string is a rule name: an unknown one is a wrong value, naming the rules
+        ({"bandwidth": "wide"}, X1, Y1, ValueError, "'bandwidth'.*rule.*silverman"),
         ({"bandwidth": [0.5, -0.5]}, X2, Y2, ValueError, "'bandwidth'.*> 0"),
         ({"bandwidth": [0.5, 0.5, 0.5]}, X2, Y2, ValueError, "'bandwidth'.*shape \\(2,\\)"),
         ({"kernel": "cosine"}, X1, Y1, ValueError, "'kernel'"),

@@ -63,13 +63,22 @@ WITHIN: dict[str, list[str]] = {
     ],
     "fuzzy": ["sets", "compiled", "system", "paper"],
     "ident": [
+        "options",
         "_params",
+        "bandwidth",
+        "data",
         "kernels",
         "binning",
         "systems",
+        "accumulators",
+        "_setup",
         "regression",
+        "arma",
+        "correlation",
+        "lags",
         "hammerstein",
         "convergence",
+        "fits",
     ],
 }
 

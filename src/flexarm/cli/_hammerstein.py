@@ -1,41 +1,33 @@
-"""``flexarm identify --hammerstein``: a Hammerstein model from data, or the robot-joint study.
+"""``flexarm identify hammerstein``: a Hammerstein model from data, or the robot-joint study.
 
-With DATA, :class:`flexarm.ident.HammersteinIdentifier` is fitted to an input
-column ``u`` and an output column ``y``; without, the nonlinear-joint robot is
-excited with a random torque and its stiffness, friction and drive
-nonlinearity are identified (:func:`flexarm.studies.joint_identification.identify_joint`).
+With DATA, :func:`flexarm.ident.fits.fit_hammerstein` is run on an input column
+``u`` and an output column ``y``; without, the nonlinear-joint robot is excited
+with a random torque and its stiffness, friction and drive nonlinearity are
+identified (:func:`flexarm.studies.joint_identification.identify_joint`).
+Which options apply to which case is read from the two option groups of the
+parser, not from a table kept by hand.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
+import inspect
 import time
-from pathlib import Path
+from collections.abc import Callable
 from typing import Any
 
-import numpy as np
-from numpy.typing import NDArray
-
-from .._io import json_ready, output_directory
-from ..ident import HammersteinIdentifier
+from ..ident.options import CRITERIA
 from ._common import UsageError
+from ._identify_common import check_out_option, given, library_errors, positive_int, report
 
-__all__ = ["DATA_FILES", "ROBOT_FILES", "fit_data", "parse_known", "parse_order", "run_robot"]
+__all__ = ["add_parser", "parse_known", "parse_order"]
 
-PROG = "flexarm identify --hammerstein"
-DATA_FILES = ("nonlinearity.csv", "impulse_response.csv", "hammerstein.png", "summary.json")
-ROBOT_FILES = ("summary.json", "curves.npz", "identify_joint.png")
-F64 = NDArray[np.float64]
-
-
-def _fail(message: str) -> UsageError:
-    return UsageError(f"{PROG}: error: {message}")
+PROG = "flexarm identify hammerstein"
 
 
 def parse_order(text: str) -> int | str:
     """``--order``: "bic", "aic" or a positive integer."""
-    if text in ("bic", "aic"):
+    if text in CRITERIA:
         return text
     try:
         value = int(text)
@@ -62,129 +54,88 @@ def parse_known(text: str) -> tuple[tuple[float, float], tuple[float, float]]:
     return (x1, p1), (x2, p2)
 
 
-def fit_data(x: F64, y: F64, dropped: int, args: argparse.Namespace, out: Path | None) -> Any:
-    """Fit the identifier to ``u = x``, ``y``; write the files into ``out`` if given."""
+def _misplaced(args: argparse.Namespace, actions: list[argparse.Action]) -> str | None:
+    """The first option among ``actions`` that the user gave, if any."""
+    for action in actions:
+        if getattr(args, action.dest) not in (None, False):
+            return action.option_strings[0]
+    return None
+
+
+def _run(
+    data_options: list[argparse.Action], robot_options: list[argparse.Action]
+) -> Callable[[argparse.Namespace], int]:
+    """The command: reject the other case's options, then fit DATA or run the robot."""
+
+    def run(args: argparse.Namespace) -> int:
+        if args.data is None:
+            wrong, case = _misplaced(args, data_options), "applies to DATA"
+        else:
+            wrong = _misplaced(args, robot_options)
+            case = "applies to the robot experiment (hammerstein without DATA)"
+        if wrong is not None:
+            raise UsageError(f"{PROG}: error: argument {wrong}: {case}")
+        check_out_option(args, PROG)
+        return _fit_data(args) if args.data is not None else _robot(args)
+
+    return run
+
+
+def _fit_data(args: argparse.Namespace) -> int:
+    from ..ident.data import read_xy
+    from ..ident.fits import fit_hammerstein
+
     t0 = time.perf_counter()
-    model = HammersteinIdentifier(
-        n_lags=40 if args.lags is None else args.lags,
-        order="bic" if args.order is None else args.order,
-        known_points=args.known,
-    )
-    try:
-        model.fit(x, y)
-        y_hat = model.predict(x)
-        fit = model.score(x, y)
-    except (TypeError, ValueError) as exc:
-        raise _fail(str(exc)) from None
-    grid = np.linspace(float(x.min()), float(x.max()), 201)
-    phi = model.nonlinearity(grid)
-    summary: dict[str, Any] = json_ready(
-        {
-            "status": "ok",
-            "mode": "hammerstein",
-            "data": str(args.data),
-            "columns": {"u": args.x, "y": args.y},
-            "n_samples": int(x.shape[0]),
-            "dropped_nan_rows": dropped,
-            "n_lags": model.n_lags,
-            "known_points": args.known,
-            "normalisation": "two-point" if args.known is not None else "up to an affine map",
-            "bandwidth": model.bandwidth_,
-            "arma_order": model.order_,
-            "a": list(model.arma_.a),
-            "b": list(model.arma_.b),
-            "impulse_response": model.impulse_response_,
-            "fit_percent": fit,
-            "nonlinearity": {"x": grid, "phi": phi},
-            "wall_time_s": time.perf_counter() - t0,
-            "out": None if out is None else str(out),
-            "files": [] if out is None else list(DATA_FILES),
-        }
-    )
-    if out is not None:
-        _write_data(out, x, y, y_hat, grid, phi, model.impulse_response_, summary)
-    return summary
-
-
-def _write_data(
-    out: Path, u: F64, y: F64, y_hat: F64, grid: F64, phi: F64, ir: F64, summary: dict[str, Any]
-) -> None:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    with output_directory(out) as tmp:
-        np.savetxt(
-            tmp / "nonlinearity.csv",
-            np.column_stack([grid, phi]),
-            fmt="%.12g",
-            delimiter=",",
-            header="u,phi",
-            comments="",
+    columns = given(args, x="x", y="y")
+    with library_errors(PROG):
+        u, y, dropped = read_xy(args.data, **columns, drop_nan=args.drop_nan)
+        res = fit_hammerstein(
+            u,
+            y,
+            **given(args, n_lags="lags", order="order", known_points="known"),
+            u_label=str(columns.get("x", 0)),
+            y_label=str(columns.get("y", 1)),
         )
-        np.savetxt(
-            tmp / "impulse_response.csv",
-            np.column_stack([np.arange(ir.shape[0]), ir]),
-            fmt="%.12g",
-            delimiter=",",
-            header="lag,impulse_response",
-            comments="",
-        )
-        fig = Figure(figsize=(11, 4), layout="constrained")
-        FigureCanvasAgg(fig)
-        ax1, ax2, ax3 = fig.subplots(1, 3)
-        ax1.plot(grid, phi, lw=2)
-        ax1.set_xlabel("u")
-        ax1.set_ylabel("identified nonlinearity")
-        ax1.set_title(summary["normalisation"])
-        ax2.stem(np.arange(ir.shape[0]), ir)
-        ax2.set_xlabel("lag")
-        ax2.set_title(f"impulse response (ARMA order {summary['arma_order']})")
-        shown = slice(0, min(u.shape[0], 2000))
-        ax3.plot(y[shown], lw=1, label="measured")
-        ax3.plot(y_hat[shown], lw=1, label="model (free run)")
-        ax3.set_xlabel("sample")
-        ax3.set_title(f"fit {summary['fit_percent']:.1f} %")
-        ax3.legend(fontsize=8)
-        fig.savefig(tmp / "hammerstein.png", dpi=100)
-        (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    summary = {
+        "status": "ok",
+        "mode": "hammerstein",
+        "data": str(args.data),
+        "columns": {"u": columns.get("x", 0), "y": columns.get("y", 1)},
+        "dropped_nan_rows": dropped,
+        **res.summary(),
+        "wall_time_s": time.perf_counter() - t0,
+    }
+    return report(args, PROG, summary, res.save, _format)
 
 
-def run_robot(args: argparse.Namespace, out: Path | None) -> Any:
-    """The random-torque experiment on the nonlinear-joint robot."""
+def _robot(args: argparse.Namespace) -> int:
     from ..studies.joint_identification import JointExcitation, identify_joint
 
     t0 = time.perf_counter()
-    try:
-        excitation = JointExcitation(duration=60.0 if args.duration is None else args.duration)
+    measurement = "sensor" if args.torque_sensor else "motor-balance"
+    with library_errors(PROG):
+        excitation = JointExcitation(**given(args, duration="duration"))
         res = identify_joint(
             excitation=excitation,
-            torque_measurement="sensor" if args.torque_sensor else "motor-balance",
-            n_lags=40 if args.lags is None else args.lags,
-            rng=0 if args.seed is None else args.seed,
+            torque_measurement=measurement,
+            **given(args, n_lags="lags", rng="seed"),
         )
-    except (TypeError, ValueError) as exc:
-        raise _fail(str(exc)) from None
-    summary: dict[str, Any] = json_ready(
-        {
-            "status": "ok",
-            "mode": "hammerstein-robot",
-            "duration_s": excitation.duration,
-            "torque_measurement": "sensor" if args.torque_sensor else "motor-balance",
-            "seed": 0 if args.seed is None else args.seed,
-            **res.summary(),
-            "wall_time_s": time.perf_counter() - t0,
-            "out": None if out is None else str(out),
-            "files": [] if out is None else list(ROBOT_FILES),
-        }
-    )
-    if out is not None:
-        with output_directory(out) as tmp:
-            res.save(tmp)
-            (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    return summary
+    seed = args.seed
+    if seed is None:
+        seed = inspect.signature(identify_joint).parameters["rng"].default
+    summary = {
+        "status": "ok",
+        "mode": "hammerstein-robot",
+        "duration_s": excitation.duration,
+        "torque_measurement": measurement,
+        "seed": seed,
+        **res.summary(),
+        "wall_time_s": time.perf_counter() - t0,
+    }
+    return report(args, PROG, summary, res.save, _format)
 
 
-def format_summary(summary: dict[str, Any]) -> str:
+def _format(summary: dict[str, Any]) -> str:
     """The human-readable summary."""
     if summary["mode"] == "hammerstein":
         return "\n".join(
@@ -208,3 +159,65 @@ def format_summary(summary: dict[str, Any]) -> str:
             f"(reference {h['reference_fit_percent']:.2f} %)",
         ]
     )
+
+
+_DESCRIPTION = """\
+A Hammerstein model of DATA (input u = --x, output y = --y): the linear part by
+the correlation approach, the nonlinearity by eq. 14 -- up to an affine map unless
+--known gives two points where it is known (the paper's two-point normalisation);
+flexarm.ident.HammersteinIdentifier. The correlation approach assumes a white
+(i.i.d.) input.
+
+Without DATA: the robot experiment (paper section IX): a nonlinear flexible joint
+driven by a random torque for --duration s (--seed), its stiffness, friction and
+drive curves identified and compared with the truth
+(flexarm.studies.joint_identification).
+"""
+
+_EPILOG = """\
+output: with --out DIR (new or empty), all at once: for DATA nonlinearity.csv
+(u,phi), impulse_response.csv (lag,impulse_response), hammerstein.png and
+summary.json; for the robot experiment summary.json, curves.npz and
+identify_joint.png. --json prints the summary on stdout.
+"""
+
+
+def add_parser(isub: Any) -> None:
+    """Add ``hammerstein`` to the ``identify`` subcommands ``isub``."""
+    p = isub.add_parser(
+        "hammerstein",
+        help="a Hammerstein model of DATA, or (without DATA) the robot-joint experiment",
+        description=_DESCRIPTION,
+        epilog=_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("data", nargs="?", metavar="DATA", help="data file (.csv, .npz or text)")
+    p.add_argument("--lags", type=positive_int(2), metavar="N", help="impulse response length (40)")
+    p.add_argument("--out", metavar="DIR", help="write the results into DIR (new or empty)")
+    p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
+    d = p.add_argument_group("with DATA")
+    data_options = [
+        d.add_argument("--x", metavar="COL", help="input column: name or 0-based index (0)"),
+        d.add_argument("--y", metavar="COL", help="output column: name or index (1)"),
+        d.add_argument("--drop-nan", action="store_true", help="drop rows with NaN"),
+        d.add_argument(
+            "--order", type=parse_order, metavar="bic|aic|N", help="ARMA order (default bic)"
+        ),
+        d.add_argument(
+            "--known",
+            type=parse_known,
+            metavar="X1:PHI1,X2:PHI2",
+            help="two points of the nonlinearity (two-point normalisation)",
+        ),
+    ]
+    r = p.add_argument_group("robot experiment (without DATA)")
+    robot_options = [
+        r.add_argument("--duration", type=float, metavar="SECONDS", help="record (default 60)"),
+        r.add_argument(
+            "--torque-sensor",
+            action="store_true",
+            help="a joint torque sensor measures tau_s (default: motor balance)",
+        ),
+        r.add_argument("--seed", type=int, metavar="S", help="seed (default 0)"),
+    ]
+    p.set_defaults(func=_run(data_options, robot_options))

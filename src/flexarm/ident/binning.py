@@ -89,6 +89,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .kernels import kernel_profile
+from .options import BINNABLE
 
 __all__ = [
     "BINNABLE",
@@ -104,8 +105,6 @@ __all__ = [
 
 F64 = NDArray[np.float64]
 
-#: Kernels that may be binned (continuous ones).
-BINNABLE: tuple[str, ...] = ("gaussian", "epanechnikov", "triangular")
 #: Truncation radius of the Gaussian in binned mode, in units of ``h_B``.
 GAUSS_RADIUS = 9.0
 _NO_END = 2**62  # block end when decay = 0 (one block)

@@ -32,20 +32,33 @@ caller (default 1, the theorem's Lipschitz case).
 The MISE is integrated over ``interval`` (default ``[-0.5, 0.5]``), inside the
 support of the inputs, so the boundary bias of the kernel estimate (``O(h)``
 within ``h`` of an edge) does not mask the interior rate.
+
+Bandwidth
+---------
+By default (``bandwidth="silverman"``) each repetition's ``h_1`` comes from
+Silverman's rule of thumb on its own inputs, anchored at the largest ``n``
+(:mod:`flexarm.ident.bandwidth`): ``h_1 = 0.9 min(sd, IQR/1.34)
+n_max**(decay - 1/5)``, so the last estimate's bandwidth is the rule's. A
+number fixes ``h_1`` for every repetition.
 """
 
 from __future__ import annotations
 
+import os
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._io import atomic_path
 from .._validation import check_array, check_int, check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
+from .bandwidth import Silverman, as_rule
+from .options import DISTRIBUTIONS
 from .regression import SemiRecursiveKernelRegression
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -58,6 +71,7 @@ __all__ = [
     "ConvergenceResult",
     "convergence_study",
     "regression_function",
+    "sample_sizes",
 ]
 
 F64 = NDArray[np.float64]
@@ -92,9 +106,6 @@ FUNCTIONS: dict[str, tuple[Callable[[F64], F64], float]] = {
     "quantizer": (_quantizer, 0.5),
 }
 
-#: Named input distributions (both centred on 0; the functions live on [-1, 1]).
-DISTRIBUTIONS: tuple[str, ...] = ("uniform", "normal")
-
 
 def regression_function(name: str) -> Callable[[F64], F64]:
     """The named regression function ``m`` (see the module docstring).
@@ -103,6 +114,41 @@ def regression_function(name: str) -> Callable[[F64], F64]:
     array([ 0. ,  0.5, -1. ])
     """
     return FUNCTIONS[check_option(name, "function", "regression_function", FUNCTIONS)][0]
+
+
+def sample_sizes(n_min: int = 250, n_max: int = 16000, steps: int = 7) -> NDArray[np.int64]:
+    """Sample sizes for a study: ``steps`` values geometric from ``n_min`` to ``n_max``, rounded.
+
+    Duplicates after rounding are dropped; the default is the study's default
+    sequence ``250, 500, ..., 16000``.
+
+    Parameters
+    ----------
+    n_min, n_max : int
+        Smallest and largest size, ``1 <= n_min < n_max``.
+    steps : int
+        Number of sizes, >= 2.
+
+    Returns
+    -------
+    ndarray of int, shape (k,)
+        Increasing sizes, ``2 <= k <= steps``.
+
+    Examples
+    --------
+    >>> sample_sizes(100, 800, 3)
+    array([100, 283, 800])
+    """
+    owner = "sample_sizes"
+    lo = check_int(n_min, "n_min", owner, minimum=1)
+    hi = check_int(n_max, "n_max", owner, minimum=1)
+    k = check_int(steps, "steps", owner, minimum=2)
+    if not lo < hi:
+        raise InvalidValueError(
+            f"The 'n_min' parameter of {owner} must be < n_max = {hi}. Got {lo} instead."
+        )
+    out: NDArray[np.int64] = np.unique(np.round(np.geomspace(lo, hi, k)).astype(np.int64))
+    return out
 
 
 def _draw(distribution: str, rng: np.random.Generator, n: int) -> F64:
@@ -134,7 +180,8 @@ class ConvergenceResult:
         ``p``.
     settings : dict
         The study's parameters (function, distribution, noise, kernel,
-        bandwidth, decay, interval, grid, repetitions, seed description).
+        bandwidth — a number or the rule's name —, ``h1`` — each repetition's
+        ``h_1`` —, decay, interval, grid, repetitions, seed description).
     """
 
     n: NDArray[np.int64]
@@ -212,6 +259,30 @@ class ConvergenceResult:
         ax.legend()
         return ax
 
+    def save(self, directory: str | os.PathLike[str]) -> list[Path]:
+        """Write ``study.csv`` (columns ``n,mise,std``) and ``study.png`` into ``directory``.
+
+        Each file is written atomically; the directory is created if needed.
+
+        Returns
+        -------
+        list of Path
+            The files written.
+        """
+        from matplotlib.figure import Figure
+
+        out = Path(directory)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / "study.csv", out / "study.png"]
+        header, table = self.table()
+        with atomic_path(paths[0]) as tmp:
+            np.savetxt(tmp, table, fmt="%.10g", delimiter=",", header=",".join(header), comments="")
+        fig = Figure(figsize=(6, 4.5), layout="constrained")
+        self.plot(ax=fig.add_subplot())
+        with atomic_path(paths[1]) as tmp:
+            fig.savefig(tmp, format="png", dpi=100)
+        return paths
+
 
 def _progress_bar(total: int, enabled: bool) -> Callable[[int], None]:
     if not enabled:
@@ -232,12 +303,12 @@ def _progress_bar(total: int, enabled: bool) -> Callable[[int], None]:
 def convergence_study(
     function: str | Callable[[F64], ArrayLike] = "smooth",
     *,
-    n: Sequence[int] | ArrayLike = (250, 500, 1000, 2000, 4000, 8000, 16000),
+    n: Sequence[int] | ArrayLike | None = None,
     repetitions: int = 20,
     noise: float = 0.1,
     distribution: str = "uniform",
     kernel: str = "gaussian",
-    bandwidth: float = 0.3,
+    bandwidth: float | str | Silverman = "silverman",
     decay: float | None = None,
     order: float | None = None,
     interval: tuple[float, float] = (-0.5, 0.5),
@@ -251,8 +322,9 @@ def convergence_study(
     ----------
     function : str or callable, default "smooth"
         One of :data:`FUNCTIONS` or ``m(x)`` mapping shape ``(k,)`` to ``(k,)``.
-    n : sequence of int, shape (k,)
-        Increasing sample sizes (>= 2 of them, each >= 1).
+    n : sequence of int, shape (k,), optional
+        Increasing sample sizes (>= 2 of them, each >= 1); default
+        :func:`sample_sizes` ``()``, i.e. ``250, 500, ..., 16000``.
     repetitions : int, default 20
         Independent data sets (>= 2, for the spread).
     noise : float, default 0.1
@@ -261,8 +333,9 @@ def convergence_study(
         Inputs ``X ~ U[-1, 1]`` or ``N(0, 0.5**2)``.
     kernel : str, default "gaussian"
         A kernel name (:data:`flexarm.ident.KERNELS`).
-    bandwidth : float, default 0.3
-        ``h_1`` (units of ``X``).
+    bandwidth : float, "silverman" or Silverman, default "silverman"
+        ``h_1`` (units of ``X``), or the rule that sets it from each
+        repetition's inputs (module docstring).
     decay : float, optional
         ``h_i = bandwidth i**-decay``; default ``1/(2p+1)``, the rate-optimal choice.
     order : float, optional
@@ -314,7 +387,7 @@ def convergence_study(
             f"callable. Got {function!r} instead."
         )
     p = p_named if order is None else check_real(order, "order", _OWNER, positive=True)
-    sizes = check_array(n, "n", _OWNER, shape=(-1,))
+    sizes = check_array(sample_sizes() if n is None else n, "n", _OWNER, shape=(-1,))
     if sizes.shape[0] < 2 or np.any(sizes < 1) or np.any(sizes != np.round(sizes)):
         raise InvalidValueError(
             f"The 'n' parameter of {_OWNER} must be at least two positive integers. "
@@ -328,7 +401,8 @@ def convergence_study(
     reps = check_int(repetitions, "repetitions", _OWNER, minimum=2)
     sigma = check_real(noise, "noise", _OWNER, nonnegative=True)
     dist = check_option(distribution, "distribution", _OWNER, DISTRIBUTIONS)
-    h1 = check_real(bandwidth, "bandwidth", _OWNER, positive=True)
+    rule = as_rule(bandwidth, _OWNER)
+    h1 = None if rule is not None else check_real(bandwidth, "bandwidth", _OWNER, positive=True)
     dec = 1.0 / (2.0 * p + 1.0) if decay is None else check_real(decay, "decay", _OWNER)
     lo, hi = (check_real(v, "interval", _OWNER) for v in interval)
     if not lo < hi:
@@ -348,6 +422,7 @@ def convergence_study(
     weights = np.full(g, (hi - lo) / (g - 1))
     weights[[0, -1]] *= 0.5  # trapezoid rule
     ise = np.empty((reps, ns.shape[0]))
+    h1s = np.empty(reps)
     tty = sys.stderr.isatty()
     show = _progress_bar(
         reps, tty and (progress is True or (progress is None and reps * int(ns[-1]) > 2_000_000))
@@ -355,7 +430,8 @@ def convergence_study(
     for rep in range(reps):
         X = _draw(dist, gen, int(ns[-1]))
         y = m(X) + sigma * gen.standard_normal(X.shape[0])
-        est = SemiRecursiveKernelRegression(kernel, h1, dec, grid=x)
+        h1s[rep] = h1 if rule is None else float(rule(X[:, None], dec, owner=_OWNER)[0])
+        est = SemiRecursiveKernelRegression(kernel, h1s[rep], dec, grid=x)
         done = 0
         for k, nk in enumerate(ns):
             est.partial_fit(X[done:nk], y[done:nk])
@@ -373,7 +449,8 @@ def convergence_study(
         "distribution": dist,
         "noise": sigma,
         "kernel": kernel,
-        "bandwidth": h1,
+        "bandwidth": h1 if rule is None else rule.label,
+        "h1": [float(v) for v in h1s],
         "decay": dec,
         "interval": [lo, hi],
         "grid": g,

@@ -48,22 +48,24 @@ mode) and then:
    leaves is carried by ``offset_`` so that :meth:`~HammersteinIdentifier.predict`
    still reproduces the output.
 
-3. **ARMA coefficients** from the impulse response by least squares on the
-   impulse response (:func:`arma_from_impulse_response`): for each order
-   ``l = 0 .. max_order`` (the paper's ``ARMA(l, l)``), Prony's linear
-   least-squares start, refined by nonlinear least squares on
-   ``sum_k (lambda_k - h_k(a, b))**2``, unstable fits reflected inside the unit
-   circle; the order minimising an information criterion (BIC by default:
-   ``L ln(RSS / L) + (2 l + 1) ln L`` over the ``L = n_lags`` coefficients) is
-   kept.
+3. **ARMA coefficients** from the impulse response
+   (:func:`~flexarm.ident.arma.arma_from_impulse_response`): for each order
+   ``l = 0 .. max_order`` (the paper's ``ARMA(l, l)``), Prony's start refined
+   by nonlinear least squares; the order minimising BIC (by default) is kept.
+
+Steps 1-3 are :func:`flexarm.ident.correlation.solve`.
 
 Defaults and scale
 ------------------
-``bandwidth="auto"`` sets ``h_1 = 0.5 s`` with ``s`` the standard deviation
-of the first ``warmup`` inputs (``h_i = h_1 i**-decay`` after that), and the
-grid spans their range widened by 10 % on each side: nothing depends on the
-units of ``u`` or ``y``. Outside the grid the estimate is held at its end
-values.
+The default bandwidth is ``Silverman(0.55)`` (:mod:`flexarm.ident.bandwidth`):
+0.55 times Silverman's rule of thumb evaluated on the first ``warmup`` inputs,
+``h_1 = 0.55 * 0.9 min(sd, IQR/1.34) warmup**(decay - 1/5)`` — with the default
+``decay = 0.2``, ``h_1 = 0.495 min(sd, IQR/1.34)`` and every ``h_i`` is 0.55
+times the rule for the first ``i`` samples. The factor below 1 keeps jumps of
+``phi`` (quantizers, dead zones with a jump) resolved; ``bandwidth="silverman"``
+gives the rule itself. The grid spans the first ``warmup`` inputs' range
+widened by 10 % on each side: nothing depends on the units of ``u`` or ``y``.
+Outside the grid the estimate is held at its end values.
 
 Streaming
 ---------
@@ -73,26 +75,44 @@ The state is the ``n_lags`` grid-mode regressions (running sums), the last
 sum in arrival order, so :meth:`~HammersteinIdentifier.partial_fit` on chunks
 equals :meth:`~HammersteinIdentifier.fit` on the whole record bit for bit.
 The impulse response, nonlinearity and ARMA model are derived from the state
-when first asked for after an update.
+when first asked for after an update. :meth:`~HammersteinIdentifier.save`
+writes that state (the lag regressions through their own state description,
+:mod:`flexarm.ident.accumulators`) and :meth:`~HammersteinIdentifier.load`
+resumes it exactly.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import json
+import os
+from collections.abc import Mapping
 from typing import Any, Self
 
-import numba as nb
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._io import atomic_path
 from .._validation import check_array, check_int, check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ._params import HyperParameters
+from .accumulators import State
+from .arma import ARMAFit, arma_from_impulse_response
+from .bandwidth import Silverman, as_rule
+from .correlation import (
+    KnownPoints,
+    Solution,
+    check_known_points,
+    solve,
+    two_point_normalisation,
+)
 from .kernels import KERNELS
+from .lags import LagRegressions
+from .options import CRITERIA, INSTRUMENTS
 from .regression import NotFittedError, SemiRecursiveKernelRegression
-from .systems import ARMA, spectral_radius
+from .systems import ARMA, fit_percent
 
 __all__ = [
+    "DEFAULT_BANDWIDTH",
     "ARMAFit",
     "HammersteinIdentifier",
     "arma_from_impulse_response",
@@ -102,250 +122,17 @@ __all__ = [
 
 F64 = NDArray[np.float64]
 _OWNER = "HammersteinIdentifier"
-_INSTRUMENTS = ("auto", "regression", "input")
-_CRITERIA = ("bic", "aic")
+_FORMAT = 1  # version of the save() file layout
+
+#: The default bandwidth: 0.55 times Silverman's rule on the first ``warmup`` inputs.
+DEFAULT_BANDWIDTH = Silverman(0.55)
 
 
-@nb.njit(cache=True)
-def _running_sums(y: F64, acc: F64) -> None:  # pragma: no cover - compiled
-    """``acc[0] += sum y``, ``acc[1] += sum y**2``, one sample at a time in order."""
-    for i in range(y.shape[0]):
-        acc[0] += y[i]
-        acc[1] += y[i] * y[i]
-
-
-# --------------------------------------------------------------------------- helpers
-
-
-def fit_percent(y: ArrayLike, y_hat: ArrayLike) -> float:
-    """Fit in percent, ``100 (1 - ||y - y_hat|| / ||y - mean(y)||)`` (100 is perfect).
-
-    Parameters
-    ----------
-    y : array_like, shape (n,)
-        Measured output.
-    y_hat : array_like, shape (n,)
-        Model output, same units.
-
-    Examples
-    --------
-    >>> fit_percent([1.0, 2.0, 3.0], [1.0, 2.0, 3.0])
-    100.0
-    """
-    ya = check_array(y, "y", "fit_percent", shape=(-1,))
-    yh = check_array(y_hat, "y_hat", "fit_percent", shape=ya.shape)
-    spread = float(np.linalg.norm(ya - ya.mean()))
-    if spread == 0.0:
-        raise InvalidValueError(
-            "The 'y' parameter of fit_percent must vary. Got a constant instead."
-        )
-    return 100.0 * (1.0 - float(np.linalg.norm(ya - yh)) / spread)
-
-
-def two_point_normalisation(m1: float, m2: float, phi1: float, phi2: float) -> tuple[float, float]:
-    """The paper's two-point normalisation: ``(d1, alpha)`` with ``phi = (m - alpha) / d1``.
-
-    ``d1 = (m1 - m2) / (phi1 - phi2)`` and ``alpha = m1 - d1 phi1``, where
-    ``m1, m2`` are the (unnormalised) estimates at two points where ``phi`` is
-    known to be ``phi1 != phi2``.
-
-    Examples
-    --------
-    >>> two_point_normalisation(3.0, 1.0, 1.0, 0.0)
-    (2.0, 1.0)
-    """
-    owner = "two_point_normalisation"
-    m1, m2 = check_real(m1, "m1", owner), check_real(m2, "m2", owner)
-    phi1, phi2 = check_real(phi1, "phi1", owner), check_real(phi2, "phi2", owner)
-    if phi1 == phi2:
-        raise InvalidValueError(
-            f"The 'phi2' parameter of {owner} must differ from phi1. Got {phi2}."
-        )
-    d1 = (m1 - m2) / (phi1 - phi2)
-    if d1 == 0.0:
-        raise InvalidValueError(
-            f"The 'm2' parameter of {owner} must differ from m1 (the estimate must separate "
-            f"the two points). Got {m2} instead."
-        )
-    return d1, m1 - d1 * phi1
-
-
-@dataclass(frozen=True)
-class ARMAFit:
-    """An ARMA model fitted to an impulse response, with the order selection record.
-
-    Attributes
-    ----------
-    model : ARMA
-        The selected model.
-    order : int
-        Its order ``l`` (``ARMA(l, l)``).
-    criterion : dict of int to float
-        Information criterion of every order tried.
-    rss : dict of int to float
-        Residual sum of squares of the impulse response for every order tried.
-    """
-
-    model: ARMA
-    order: int
-    criterion: dict[int, float] = field(default_factory=dict)
-    rss: dict[int, float] = field(default_factory=dict)
-
-
-def _stabilise(a: F64) -> F64:
-    """Reflect AR roots on or outside the unit circle to ``0.999 / conj(r)``."""
-    if a.shape[0] == 0 or spectral_radius(a) < 1.0:
-        return a
-    roots = np.roots(np.r_[1.0, -a])
-    big = np.abs(roots) >= 1.0
-    roots[big] = 0.999 / np.conj(roots[big])
-    out: F64 = -np.real(np.poly(roots))[1:]
-    return out
-
-
-def _impulse(a: F64, b: F64, n: int) -> F64:
-    from scipy.signal import lfilter
-
-    delta = np.zeros(n)
-    delta[0] = 1.0
-    out: F64 = np.asarray(lfilter(b, np.r_[1.0, -a], delta), dtype=np.float64)
-    return out
-
-
-def _fit_order(h: F64, order: int) -> tuple[F64, F64]:
-    """ARMA(order, order) fitted to ``h`` (Prony start, nonlinear least-squares refinement)."""
-    from scipy.optimize import least_squares
-
-    L = h.shape[0]
-    p = order
-    if p == 0:
-        return np.zeros(0), h[:1].copy()
-    rows = np.array([h[k - p : k][::-1] for k in range(p + 1, L)])
-    a = np.linalg.lstsq(rows, h[p + 1 : L], rcond=None)[0] if rows.size else np.zeros(p)
-    a = _stabilise(np.asarray(a, dtype=np.float64))
-    b = np.array([h[j] - sum(a[i - 1] * h[j - i] for i in range(1, j + 1)) for j in range(p + 1)])
-
-    def resid(theta: F64) -> F64:
-        return _impulse(theta[:p], theta[p:], L) - h
-
-    try:
-        sol = least_squares(resid, np.r_[a, b], method="lm", max_nfev=200 * (2 * p + 1))
-        a2, b2 = sol.x[:p], sol.x[p:]
-        if spectral_radius(a2) < 1.0 and np.sum(resid(sol.x) ** 2) <= np.sum(
-            resid(np.r_[a, b]) ** 2
-        ):
-            a, b = a2, b2
-    except (ValueError, np.linalg.LinAlgError):  # pragma: no cover - keep the Prony start
-        pass
-    return np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
-
-
-def arma_from_impulse_response(
-    h: ArrayLike, order: int | str = "bic", max_order: int = 4
-) -> ARMAFit:
-    """Fit the paper's ARMA(l, l) model to an impulse response ``h_0 .. h_{L-1}``.
-
-    For each ``l`` the AR part comes from Prony's equations
-    ``h_k = a1 h_{k-1} + ... + al h_{k-l}`` (``k > l``) by linear least squares,
-    the MA part from ``b_j = h_j - sum_i a_i h_{j-i}`` (``j <= l``); both are
-    then refined by nonlinear least squares on the impulse-response error
-    (Levenberg–Marquardt), keeping the refinement only if it is stable and
-    better. Unstable AR roots are reflected inside the unit circle.
-
-    Parameters
-    ----------
-    h : array_like, shape (L,)
-        Impulse response (``L >= 2 max_order + 2``).
-    order : int or {"bic", "aic"}
-        A fixed order ``l``, or the criterion that selects it:
-        BIC ``L ln(RSS/L) + (2l+1) ln L`` or AIC ``L ln(RSS/L) + 2 (2l+1)``,
-        with ``RSS`` floored at ``1e-12 sum h**2`` (ties go to the lower order).
-    max_order : int
-        Largest ``l`` tried by a criterion.
-
-    Returns
-    -------
-    ARMAFit
-
-    Examples
-    --------
-    >>> h = ARMA((0.5,), (1.0, 0.3)).impulse_response(30)
-    >>> fit = arma_from_impulse_response(h)
-    >>> fit.order, [round(v, 6) for v in fit.model.a + fit.model.b]
-    (1, [0.5, 1.0, 0.3])
-    """
-    owner = "arma_from_impulse_response"
-    ha = check_array(h, "h", owner, shape=(-1,))
-    max_order = check_int(max_order, "max_order", owner, minimum=0)
-    if isinstance(order, str):
-        check_option(order, "order", owner, _CRITERIA)
-        orders = list(range(max_order + 1))
-    else:
-        orders = [check_int(order, "order", owner, minimum=0)]
-    L = ha.shape[0]
-    need = 2 * max(orders) + 2
-    if need > L:
-        raise InvalidValueError(
-            f"The 'h' parameter of {owner} must hold >= {need} values for order "
-            f"{max(orders)}. Got {L} instead."
-        )
-    if not np.any(ha != 0.0):
-        raise InvalidValueError(
-            f"The 'h' parameter of {owner} must not be all zero. Got zeros instead."
-        )
-    floor = 1e-12 * float(np.sum(ha**2))
-    crit: dict[int, float] = {}
-    rss: dict[int, float] = {}
-    models: dict[int, ARMA] = {}
-    for order_l in orders:
-        a, b = _fit_order(ha, order_l)
-        if not np.any(b != 0.0):
-            continue
-        r = float(np.sum((_impulse(a, b, L) - ha) ** 2))
-        k = 2 * order_l + 1
-        penalty = k * np.log(L) if order != "aic" else 2.0 * k
-        crit[order_l] = float(L * np.log(max(r, floor) / L) + penalty)
-        rss[order_l] = r
-        models[order_l] = ARMA(tuple(a.tolist()), tuple(b.tolist()))
-    best = min(crit, key=lambda o: (crit[o], o))
-    return ARMAFit(models[best], best, crit, rss)
-
-
-# --------------------------------------------------------------------------- estimator
-
-
-@dataclass(frozen=True)
-class _Solution:
-    lags: F64  # lambda-tilde, unnormalised
-    shape: F64  # psi on the valid grid points
-    grid: F64  # valid grid points
-    weights: F64  # density weights p_g on them (sum 1)
-    impulse: F64
-    nonlinearity: F64
-    arma: ARMAFit
-    offset: float
-    singular_values: F64
-
-
-def _check_known_points(value: Any) -> tuple[tuple[float, float], tuple[float, float]] | None:
-    if value is None:
-        return None
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        arr = np.zeros(0)
-    if arr.shape != (2, 2) or not np.all(np.isfinite(arr)):
-        raise InvalidValueError(
-            f"The 'known_points' parameter of {_OWNER} must be ((x1, phi(x1)), (x2, phi(x2))), "
-            f"four finite numbers. Got {value!r} instead."
-        )
-    (x1, f1), (x2, f2) = arr.tolist()
-    if x1 == x2 or f1 == f2:
-        raise InvalidValueError(
-            f"The 'known_points' parameter of {_OWNER} must have x1 != x2 and "
-            f"phi(x1) != phi(x2). Got {value!r} instead."
-        )
-    return (x1, f1), (x2, f2)
+def _plain(value: Any) -> Any:
+    """NumPy scalars and arrays as plain Python values, for JSON."""
+    if isinstance(value, np.ndarray | np.generic):
+        return value.tolist()
+    raise TypeError(f"{type(value).__name__} is not JSON serialisable")
 
 
 class HammersteinIdentifier(HyperParameters):
@@ -364,9 +151,9 @@ class HammersteinIdentifier(HyperParameters):
         Instrument of the correlation approach (module docstring).
     kernel : str, default "epanechnikov"
         Kernel of the lag regressions (:data:`flexarm.ident.KERNELS`).
-    bandwidth : "auto" or float, default "auto"
-        ``h_1`` in units of ``u``; ``"auto"``: half the standard deviation of
-        the first ``warmup`` inputs.
+    bandwidth : float, "silverman" or Silverman, default Silverman(0.55)
+        ``h_1`` in units of ``u``, or a rule evaluated on the first ``warmup``
+        inputs (:mod:`flexarm.ident.bandwidth`; module docstring).
     decay : float, default 0.2
         ``h_i = h_1 i**-decay`` (``0 <= decay <= 1``; the paper's conditions
         need ``decay > 0``).
@@ -377,7 +164,7 @@ class HammersteinIdentifier(HyperParameters):
         the paper's two-point normalisation. Without them ``phi`` is returned
         up to an affine map (module docstring).
     warmup : int, default 256
-        Samples buffered before the grid and ``"auto"`` bandwidth are fixed
+        Samples buffered before the grid and a rule's bandwidth are fixed
         (from those samples); :meth:`fit` needs at least this many.
 
     Attributes
@@ -429,10 +216,10 @@ class HammersteinIdentifier(HyperParameters):
         max_order: int = 4,
         instrument: str = "auto",
         kernel: str = "epanechnikov",
-        bandwidth: float | str = "auto",
+        bandwidth: float | str | Silverman = DEFAULT_BANDWIDTH,
         decay: float = 0.2,
         grid_size: int = 101,
-        known_points: Any = None,
+        known_points: KnownPoints | None = None,
         warmup: int = 256,
     ) -> None:
         self.n_lags = n_lags
@@ -452,7 +239,7 @@ class HammersteinIdentifier(HyperParameters):
         p["n_lags"] = check_int(self.n_lags, "n_lags", _OWNER, minimum=1)
         p["max_order"] = check_int(self.max_order, "max_order", _OWNER, minimum=0)
         if isinstance(self.order, str):
-            p["order"] = check_option(self.order, "order", _OWNER, _CRITERIA)
+            p["order"] = check_option(self.order, "order", _OWNER, CRITERIA)
             top = p["max_order"]
         else:
             p["order"] = check_int(self.order, "order", _OWNER, minimum=0)
@@ -462,13 +249,14 @@ class HammersteinIdentifier(HyperParameters):
                 f"The 'n_lags' parameter of {_OWNER} must be >= 2 * order + 2 = {2 * top + 2} "
                 f"to fit ARMA order {top}. Got {p['n_lags']} instead."
             )
-        p["instrument"] = check_option(self.instrument, "instrument", _OWNER, _INSTRUMENTS)
+        p["instrument"] = check_option(self.instrument, "instrument", _OWNER, INSTRUMENTS)
         p["kernel"] = check_option(self.kernel, "kernel", _OWNER, KERNELS)
-        if isinstance(self.bandwidth, str):
-            check_option(self.bandwidth, "bandwidth", _OWNER, ("auto",))
-            p["bandwidth"] = None
-        else:
-            p["bandwidth"] = check_real(self.bandwidth, "bandwidth", _OWNER, positive=True)
+        rule = as_rule(self.bandwidth, _OWNER)
+        p["bandwidth"] = (
+            rule
+            if rule is not None
+            else check_real(self.bandwidth, "bandwidth", _OWNER, positive=True)
+        )
         decay = check_real(self.decay, "decay", _OWNER, nonnegative=True)
         if decay > 1.0:
             raise InvalidValueError(
@@ -476,7 +264,7 @@ class HammersteinIdentifier(HyperParameters):
             )
         p["decay"] = decay
         p["grid_size"] = check_int(self.grid_size, "grid_size", _OWNER, minimum=8)
-        p["known_points"] = _check_known_points(self.known_points)
+        p["known_points"] = check_known_points(self.known_points, _OWNER)
         p["warmup"] = check_int(self.warmup, "warmup", _OWNER, minimum=8)
         return p
 
@@ -505,18 +293,7 @@ class HammersteinIdentifier(HyperParameters):
         return ua, ya
 
     def _reset(self) -> None:
-        for name in [k for k in vars(self) if k.endswith("_") and not k.startswith("__")]:
-            delattr(self, name)
-        for name in (
-            "_params",
-            "_frozen",
-            "_buffer_u",
-            "_buffer_y",
-            "_tail",
-            "_sums",
-            "_grid_all",
-            "_cache",
-        ):
+        for name in ("_params", "_frozen", "_lags", "_cache"):
             self.__dict__.pop(name, None)
 
     def fit(self, u: ArrayLike, y: ArrayLike) -> Self:
@@ -568,13 +345,10 @@ class HammersteinIdentifier(HyperParameters):
         self
         """
         ua, ya = self._check_uy(u, y)
-        if not hasattr(self, "_params"):
+        if "_params" not in self.__dict__:
             self._params = self._validated()
             self._frozen = self.get_params()
-            self._buffer_u: list[F64] = []
-            self._buffer_y: list[F64] = []
-            self._sums = np.zeros(2)
-            self.n_samples_ = 0
+            self._lags = LagRegressions(self._params, _OWNER)
         else:
             now = self.get_params()
             changed = sorted(k for k in now if repr(now[k]) != repr(self._frozen[k]))
@@ -584,133 +358,65 @@ class HammersteinIdentifier(HyperParameters):
                     "partial_fit. Got new values instead; call fit to start again."
                 )
         self.__dict__.pop("_cache", None)
-        if ua.shape[0] == 0:
-            return self
-        _running_sums(ya, self._sums)
-        self.n_samples_ += ua.shape[0]
-        if not hasattr(self, "regressions_"):
-            self._buffer_u.append(ua)
-            self._buffer_y.append(ya)
-            if self.n_samples_ < self._params["warmup"]:
-                return self
-            ua = np.concatenate(self._buffer_u)
-            ya = np.concatenate(self._buffer_y)
-            self._buffer_u, self._buffer_y = [], []
-            self._start(ua[: self._params["warmup"]])
-        self._add(ua, ya)
+        self._lags.add_chunk(ua, ya)
         return self
 
-    def _start(self, u0: F64) -> None:
-        p = self._params
-        spread = float(np.std(u0))
-        if not spread > 0.0:
-            raise InvalidValueError(
-                f"The 'u' parameter of {_OWNER} must vary (its spread sets the grid and the "
-                f"bandwidth). Got a constant input over the first {u0.shape[0]} samples instead."
-            )
-        lo, hi = float(np.min(u0)), float(np.max(u0))
-        margin = 0.1 * (hi - lo)
-        grid = np.linspace(lo - margin, hi + margin, p["grid_size"])
-        h1 = 0.5 * spread if p["bandwidth"] is None else p["bandwidth"]
-        self.bandwidth_ = h1
-        self._grid_all = grid
-        self.regressions_ = [
-            SemiRecursiveKernelRegression(
-                kernel=p["kernel"], bandwidth=h1, decay=p["decay"], grid=grid
-            )
-            for _ in range(p["n_lags"])
-        ]
-        self._tail = np.zeros(0)
+    @property
+    def n_samples_(self) -> int:
+        """Samples seen."""
+        lags: LagRegressions | None = self.__dict__.get("_lags")
+        if lags is None:
+            raise NotFittedError(f"This {_OWNER} instance is not fitted yet.")
+        return lags.n_samples
 
-    def _add(self, u: F64, y: F64) -> None:
-        L = self._params["n_lags"]
-        t = self._tail.shape[0]
-        ext = np.concatenate([self._tail, u])
-        m = u.shape[0]
-        for k, reg in enumerate(self.regressions_):
-            j0 = max(0, k - t)
-            if j0 >= m:
-                continue
-            reg.partial_fit(ext[t + j0 - k : t + m - k], y[j0:])
-        self._tail = ext[-(L - 1) :].copy() if L > 1 else np.zeros(0)
+    def _started(self, name: str) -> LagRegressions:
+        lags: LagRegressions | None = self.__dict__.get("_lags")
+        if lags is None or lags.regressions is None:
+            raise NotFittedError(
+                f"This {_OWNER} instance has no {name} yet (fewer than warmup samples seen)."
+            )
+        return lags
+
+    @property
+    def bandwidth_(self) -> float:
+        """``h_1`` in use (units of ``u``), fixed after the first ``warmup`` samples."""
+        return self._started("bandwidth_").bandwidth
+
+    @property
+    def regressions_(self) -> list[SemiRecursiveKernelRegression]:
+        """The lag regressions ``m_k``, ``k = 0 .. n_lags - 1`` (grid mode)."""
+        regs = self._started("regressions_").regressions
+        assert regs is not None
+        return regs
 
     # ---------------------------------------------------------------- solution
 
-    def _check_fitted(self) -> None:
-        if (
-            not hasattr(self, "regressions_")
-            or self.regressions_[-1].__dict__.get("n_samples_", 0) < 2
-        ):
+    def _check_fitted(self) -> LagRegressions:
+        lags: LagRegressions | None = self.__dict__.get("_lags")
+        if lags is None or not lags.ready:
             raise NotFittedError(
                 f"This {_OWNER} instance is not fitted yet (or has seen fewer than "
                 "warmup + n_lags samples). Call 'fit' or 'partial_fit' with more data "
                 "before using this estimator."
             )
+        return lags
 
-    def _solution(self) -> _Solution:
-        self._check_fitted()
-        cached = self.__dict__.get("_cache")
+    def _solution(self) -> Solution:
+        lags = self._check_fitted()
+        cached: Solution | None = self.__dict__.get("_cache")
         if cached is not None:
-            sol: _Solution = cached
-            return sol
+            return cached
         p = self._params
-        num = np.array([r.numerator_ for r in self.regressions_])
-        den = np.array([r.denominator_ for r in self.regressions_])
-        valid = np.all(den > 0.0, axis=0)
-        if np.count_nonzero(valid) < 2:
-            raise InvalidValueError(
-                f"The 'u' parameter of {_OWNER} must spread over the grid. Got samples "
-                "reaching fewer than 2 grid points instead."
-            )
-        grid = self._grid_all[valid]
-        m = num[:, valid] / den[:, valid]
-        w = den[0, valid] / np.sum(den[0, valid])
-        centred = m - (m @ w)[:, None]
-        sq = np.sqrt(w)
-        svals = np.linalg.svd(centred * sq[None, :], compute_uv=False)
-        instrument = p["instrument"]
-        if instrument == "auto":
-            left, s, _ = np.linalg.svd(centred * sq[None, :], full_matrices=False)
-            psi = (left[:, 0] @ centred) / s[0] if s[0] > 0 else np.zeros(grid.shape[0])
-        elif instrument == "regression":
-            psi = centred[0]
-        else:
-            psi = grid - grid @ w
-        lags = centred @ (w * psi)
-        energy = float(lags @ lags)
-        if not energy > 0.0 or not np.isfinite(energy):
-            raise InvalidValueError(
-                f"The 'y' parameter of {_OWNER} must depend on u through the chosen instrument "
-                f"({instrument!r}). Got no correlation instead (try instrument='auto')."
-            )
-        shape = (lags @ centred) / energy
-        known = p["known_points"]
-        if known is None:
-            k = int(np.argmax(np.abs(lags)))
-            scale = float(lags[k])
-            impulse = lags / scale
-            phi = shape * scale
-        else:
-            (x1, f1), (x2, f2) = known
-            for x in (x1, x2):
-                if not grid[0] <= x <= grid[-1]:
-                    raise InvalidValueError(
-                        f"The 'known_points' parameter of {_OWNER} must lie within the input's "
-                        f"range [{grid[0]:.6g}, {grid[-1]:.6g}]. Got x = {x} instead."
-                    )
-            s1, s2 = np.interp([x1, x2], grid, shape)
-            if s1 == s2:
-                raise InvalidValueError(
-                    f"The 'known_points' parameter of {_OWNER} must name points where the "
-                    f"estimate differs. Got equal estimates at x1 = {x1} and x2 = {x2} instead."
-                )
-            d1, alpha = two_point_normalisation(float(s1), float(s2), f1, f2)
-            phi = (shape - alpha) / d1
-            impulse = lags * d1
-        arma = arma_from_impulse_response(impulse, order=p["order"], max_order=p["max_order"])
-        mean_y = float(self._sums[0] / self.n_samples_)
-        offset = mean_y - arma.model.dc_gain * float(phi @ w)
-        sol = _Solution(lags, shape, grid, w, impulse, phi, arma, offset, svals)
+        sol = solve(
+            *lags.lag_sums(),
+            lags.grid,
+            instrument=p["instrument"],
+            known_points=p["known_points"],
+            order=p["order"],
+            max_order=p["max_order"],
+            mean_y=float(lags.sums[0] / lags.n_samples),
+            owner=_OWNER,
+        )
         self._cache = sol
         return sol
 
@@ -806,3 +512,78 @@ class HammersteinIdentifier(HyperParameters):
         """Fit in percent of :meth:`predict` on ``(u, y)`` (:func:`fit_percent`)."""
         ua, ya = self._check_uy(u, y)
         return fit_percent(ya, self.predict(ua))
+
+    # ---------------------------------------------------------------- persistence
+
+    def _state(self) -> State:
+        """The one state description: hyperparameters (JSON) and the lag regressions' state."""
+        lags: LagRegressions | None = self.__dict__.get("_lags")
+        if lags is None:
+            raise NotFittedError(
+                f"This {_OWNER} instance is not fitted yet. Call 'fit' or 'partial_fit' "
+                "before saving it."
+            )
+        params = dict(self._frozen)
+        if isinstance(params["bandwidth"], Silverman):
+            params["bandwidth"] = {"silverman": params["bandwidth"].factor}
+        header: State = {
+            "format": np.array(_FORMAT),
+            "estimator": np.array(_OWNER),
+            "params": np.array(json.dumps(params, default=_plain)),
+        }
+        return {**header, **lags.state()}
+
+    @classmethod
+    def _from_state(cls, data: Mapping[str, NDArray[Any]]) -> Self:
+        if int(data.get("format", -1)) != _FORMAT or str(data.get("estimator")) != _OWNER:
+            raise InvalidValueError(
+                f"The 'path' parameter of {_OWNER}.load must name a file saved by "
+                f"{_OWNER}.save. Got {data.get('estimator', 'another file')!s} instead."
+            )
+        params = json.loads(str(data["params"]))
+        if isinstance(params["bandwidth"], dict):
+            params["bandwidth"] = Silverman(float(params["bandwidth"]["silverman"]))
+        if params["known_points"] is not None:
+            (x1, f1), (x2, f2) = params["known_points"]
+            params["known_points"] = ((x1, f1), (x2, f2))
+        est = cls(**params)
+        est._params = est._validated()
+        est._frozen = est.get_params()
+        est._lags = LagRegressions.from_state(est._params, _OWNER, data)
+        return est
+
+    def save(self, path: str | os.PathLike[str]) -> None:
+        """Write the hyperparameters and the streaming state to ``path`` (NumPy ``.npz``).
+
+        Works at any point after the first :meth:`fit` or :meth:`partial_fit`
+        (also during the warmup); :meth:`load` resumes exactly, so
+        ``partial_fit`` after ``load`` gives bit for bit what it would have
+        given without stopping. Plain arrays only (no pickle), written
+        atomically as given (no suffix added).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Destination file.
+        """
+        arrays: dict[str, Any] = self._state()
+        with atomic_path(path) as tmp, open(tmp, "wb") as f:
+            np.savez(f, **arrays)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> Self:
+        """Read an identifier written by :meth:`save`.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            File written by :meth:`save`.
+
+        Returns
+        -------
+        HammersteinIdentifier
+            With the state it had when saved.
+        """
+        with np.load(path, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+        return cls._from_state(data)

@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_option
 from ..errors import InvalidValueError
+from .options import KERNELS
 
 __all__ = [
     "KERNELS",
@@ -60,9 +61,6 @@ __all__ = [
 ]
 
 F64 = NDArray[np.float64]
-
-#: Names of the built-in kernels, in the order of their compiled codes.
-KERNELS: tuple[str, ...] = ("gaussian", "epanechnikov", "uniform", "triangular")
 
 #: A user kernel: ``u`` of shape ``(m, d)`` in, weights of shape ``(m,)`` out.
 KernelFunction = Callable[[F64], ArrayLike]

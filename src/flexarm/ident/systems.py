@@ -42,6 +42,7 @@ __all__ = [
     "Saturation",
     "Sign",
     "as_generator",
+    "fit_percent",
     "simulate_hammerstein",
     "spectral_radius",
 ]
@@ -428,6 +429,31 @@ EXAMPLE_ARMA: dict[str, ARMA] = {
 
 
 # --------------------------------------------------------------------------- simulation
+
+
+def fit_percent(y: ArrayLike, y_hat: ArrayLike) -> float:
+    """Fit in percent, ``100 (1 - ||y - y_hat|| / ||y - mean(y)||)`` (100 is perfect).
+
+    Parameters
+    ----------
+    y : array_like, shape (n,)
+        Measured output.
+    y_hat : array_like, shape (n,)
+        Model output, same units.
+
+    Examples
+    --------
+    >>> fit_percent([1.0, 2.0, 3.0], [1.0, 2.0, 3.0])
+    100.0
+    """
+    ya = check_array(y, "y", "fit_percent", shape=(-1,))
+    yh = check_array(y_hat, "y_hat", "fit_percent", shape=ya.shape)
+    spread = float(np.linalg.norm(ya - ya.mean()))
+    if spread == 0.0:
+        raise InvalidValueError(
+            "The 'y' parameter of fit_percent must vary. Got a constant instead."
+        )
+    return 100.0 * (1.0 - float(np.linalg.norm(ya - yh)) / spread)
 
 
 def as_generator(rng: Any, owner: str) -> np.random.Generator:

@@ -1,0 +1,125 @@
+"""What the ``flexarm identify`` subcommands share: parsing helpers, error mapping, output."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from ..errors import InvalidTypeError, InvalidValueError
+from ..ident.options import BANDWIDTH_RULES
+from ._common import EXIT_FAILURE, Parser, UsageError, check_out, json_ready, output_directory
+
+__all__ = [
+    "CommandParser",
+    "check_out_option",
+    "given",
+    "library_errors",
+    "parse_bandwidth",
+    "positive_int",
+    "report",
+]
+
+
+class CommandParser(Parser):
+    """A subcommand's parser: one-line errors, and unknown options named by the subcommand."""
+
+    def parse_known_args(  # type: ignore[override]
+        self, args: Any = None, namespace: Any = None
+    ) -> tuple[argparse.Namespace, list[str]]:
+        ns, extras = super().parse_known_args(args, namespace)
+        if extras:
+            self.error(f"unrecognized arguments: {' '.join(extras)}")
+        return ns, extras
+
+
+@contextmanager
+def library_errors(prog: str) -> Iterator[None]:
+    """Turn flexarm's own validation errors into one-line usage errors of ``prog``.
+
+    Only :class:`~flexarm.errors.InvalidValueError` and
+    :class:`~flexarm.errors.InvalidTypeError` (data-file errors included): any
+    other exception is a bug and keeps its traceback.
+    """
+    try:
+        yield
+    except (InvalidValueError, InvalidTypeError) as exc:
+        raise UsageError(f"{prog}: error: {exc}") from None
+
+
+def parse_bandwidth(text: str) -> float | str:
+    """``--bandwidth``: a number (checked by the library) or a rule name."""
+    if text in BANDWIDTH_RULES:
+        return text
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"must be a number or one of {', '.join(BANDWIDTH_RULES)}. Got {text!r} instead."
+        ) from None
+
+
+def positive_int(minimum: int) -> Callable[[str], int]:
+    """An ``argparse`` type: an integer ``>= minimum``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = minimum - 1
+        if value < minimum:
+            raise argparse.ArgumentTypeError(
+                f"must be an integer >= {minimum}. Got {text!r} instead."
+            )
+        return value
+
+    return parse
+
+
+def given(args: argparse.Namespace, **names: str) -> dict[str, Any]:
+    """``{parameter: value}`` of the options the user gave (``names``: parameter -> dest)."""
+    return {p: getattr(args, d) for p, d in names.items() if getattr(args, d) is not None}
+
+
+def report(
+    args: argparse.Namespace,
+    prog: str,
+    summary: dict[str, Any],
+    save: Callable[[Path], list[Path]],
+    text: Callable[[dict[str, Any]], str],
+) -> int:
+    """Write ``save``'s files and ``summary.json`` into ``--out`` (all at once), then print.
+
+    ``summary`` gets ``out`` and ``files``; stdout gets the JSON (``--json``)
+    or ``text(summary)``. Exit status 1 if the files cannot be written.
+    """
+    out = None if args.out is None else Path(os.path.abspath(args.out))
+    summary["out"] = None if out is None else str(out)
+    summary["files"] = []
+    if out is not None:
+        try:
+            with output_directory(out) as tmp:
+                names = [p.name for p in save(tmp)]
+                summary["files"] = [*dict.fromkeys([*names, "summary.json"])]
+                (tmp / "summary.json").write_text(json.dumps(json_ready(summary), indent=2) + "\n")
+        except OSError as exc:
+            print(f"{prog}: error: cannot write {str(out)!r}: {exc}", file=sys.stderr)
+            return EXIT_FAILURE
+    if args.json:
+        print(json.dumps(json_ready(summary), indent=2))
+    else:
+        print(text(summary))
+        if out is not None:
+            print(f"  results in {out}: {', '.join(summary['files'])}")
+    return 0
+
+
+def check_out_option(args: argparse.Namespace, prog: str) -> None:
+    """Refuse an ``--out`` that cannot take the results, before any work."""
+    if args.out is not None:
+        check_out(Path(os.path.abspath(args.out)), prog)

@@ -1,0 +1,123 @@
+"""Exact mode: the samples are kept, and eq. 14 is evaluated at any point on demand."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..kernels import SERIES_TERMS, SERIES_WIDTH, gauss_series_eval, gauss_series_moments
+from . import _loops
+from .base import CALLABLE, Accumulator, Smoothing, State
+
+__all__ = ["ExactSamples"]
+
+F64 = NDArray[np.float64]
+_KEYS = ("X", "y", "h", "scale")
+
+
+class ExactSamples(Accumulator):
+    """The samples ``(X_i, Y_i, h_i, scale_i)``, stored with amortised growth.
+
+    :meth:`evaluate` sums eq. 14 over every sample at each query point
+    (compiled, O(n) per point) — or, with ``setup.series``, by the Gaussian
+    series (:func:`flexarm.ident.kernels.gauss_series_moments`) when the
+    clusters do not outnumber the samples. Chunked :meth:`add_chunk` stores
+    exactly what one call would (``h_i`` depends on the index ``i`` only).
+
+    State arrays: ``X`` (n, d), ``y`` (n,), ``h`` (n, d), ``scale`` (n,).
+    """
+
+    mode = "exact"
+
+    def __init__(self, setup: Smoothing) -> None:
+        super().__init__(setup)
+        d = setup.d
+        self._X = np.empty((16, d))
+        self._y = np.empty(16)
+        self._h = np.empty((16, d))
+        self._scale = np.empty(16)
+
+    @property
+    def X(self) -> F64:
+        """Stored inputs, shape ``(n, d)``."""
+        out: F64 = self._X[: self.n_samples]
+        return out
+
+    @property
+    def y(self) -> F64:
+        """Stored outputs, shape ``(n,)``."""
+        out: F64 = self._y[: self.n_samples]
+        return out
+
+    @property
+    def h(self) -> F64:
+        """Per-sample bandwidths ``h_i``, shape ``(n, d)``."""
+        out: F64 = self._h[: self.n_samples]
+        return out
+
+    @property
+    def scale(self) -> F64:
+        """Per-sample weight factors (``prod_j h_ij**-1`` or 1), shape ``(n,)``."""
+        out: F64 = self._scale[: self.n_samples]
+        return out
+
+    def _add(self, X: F64, y: F64) -> None:
+        n0, m = self.n_samples, X.shape[0]
+        h, scale = self.setup.sample_bandwidths(n0, m)
+        need = n0 + m
+        if need > self._y.shape[0]:
+            cap = max(need, 2 * self._y.shape[0])
+            for name in ("_X", "_y", "_h", "_scale"):
+                old = getattr(self, name)
+                new = np.empty((cap, *old.shape[1:]))
+                new[:n0] = old[:n0]
+                setattr(self, name, new)
+        self._X[n0:need] = X
+        self._y[n0:need] = y
+        self._h[n0:need] = h
+        self._scale[n0:need] = scale
+
+    def evaluate(self, Q: F64) -> F64:
+        setup = self.setup
+        X, y, h, s = self.X, self.y, self.h, self.scale
+        if setup.series:
+            out = self._series(Q, X, y)
+            if out is not None:
+                return out
+        if setup.code != CALLABLE:
+            if setup.d == 1:
+                r1: F64 = _loops.exact_predict_1d(setup.code, Q[:, 0], X[:, 0], y, h[:, 0], s)
+                return r1
+            res: F64 = _loops.exact_predict(setup.code, Q, X, y, h, s)
+            return res
+        num = np.zeros(Q.shape[0])
+        den = np.zeros(Q.shape[0])
+        setup.callable_sums(Q, X, y, h, s, num, den)
+        r: F64 = _loops.ratio(num, den)
+        return r
+
+    def _series(self, Q: F64, X: F64, y: F64) -> F64 | None:
+        """Series sums at ``Q``, or ``None`` where clusters would outnumber the samples."""
+        hs = float(self.setup.bandwidth[0])
+        x0 = np.ascontiguousarray(X[:, 0])
+        origin = float(x0.min()) - 0.5 * SERIES_WIDTH * hs
+        clusters = int((float(x0.max()) - origin) / (SERIES_WIDTH * hs)) + 2
+        if clusters > max(64, 4 * x0.shape[0]):  # the series gains nothing: sum directly
+            return None
+        mn = np.zeros((clusters, SERIES_TERMS))
+        md = np.zeros((clusters, SERIES_TERMS))
+        gauss_series_moments(x0, y, self.setup.series_scale(), origin, hs, mn, md)
+        num, den, _ = gauss_series_eval(np.ascontiguousarray(Q[:, 0]), origin, hs, mn, md)
+        out: F64 = _loops.ratio(num, den)
+        return out
+
+    def _arrays(self) -> State:
+        return {"X": self.X, "y": self.y, "h": self.h, "scale": self.scale}
+
+    def _restore(self, state: Mapping[str, NDArray[Any]]) -> None:
+        self._X, self._y, self._h, self._scale = (
+            np.array(state[k], dtype=np.float64, order="C") for k in _KEYS
+        )

@@ -1,0 +1,401 @@
+"""One-call fits from data, each a result with ``summary()``, ``plot()`` and ``save()``.
+
+* :func:`fit_regression` — the semi-recursive estimate (eq. 14) of ``E[y | x]``
+  on a grid spanning the inputs (:class:`RegressionFit`);
+* :func:`fit_hammerstein` — a Hammerstein model of ``u -> y``
+  (:class:`HammersteinFit`).
+
+``flexarm identify fit`` and ``flexarm identify hammerstein DATA`` are these
+functions on two columns of a file (:func:`flexarm.ident.data.read_xy`).
+Plots take ``ax=None`` (or ``fig=None``), return the handles and never show
+anything; Matplotlib is imported when a plot is drawn.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._io import atomic_path
+from .._validation import check_array, check_int
+from ..errors import InvalidValueError
+from .bandwidth import Silverman, as_rule
+from .correlation import KnownPoints
+from .hammerstein import DEFAULT_BANDWIDTH, HammersteinIdentifier
+from .kernels import KernelFunction
+from .regression import SemiRecursiveKernelRegression
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+__all__ = ["HammersteinFit", "RegressionFit", "fit_hammerstein", "fit_regression"]
+
+F64 = NDArray[np.float64]
+_PLOT_POINTS = 5000  # data points drawn at most (every k-th)
+
+
+def _xy(x: ArrayLike, y: ArrayLike, owner: str, names: tuple[str, str]) -> tuple[F64, F64]:
+    xa = check_array(x, names[0], owner, shape=(-1,))
+    ya = check_array(y, names[1], owner, shape=(xa.shape[0],))
+    if xa.shape[0] < 2:
+        raise InvalidValueError(
+            f"The '{names[0]}' parameter of {owner} must hold at least 2 samples. "
+            f"Got {xa.shape[0]} instead."
+        )
+    if np.ptp(xa) == 0.0:
+        raise InvalidValueError(
+            f"The '{names[0]}' parameter of {owner} must vary (the grid spans it). "
+            "Got a constant instead."
+        )
+    return np.asarray(xa, dtype=np.float64), np.asarray(ya, dtype=np.float64)
+
+
+def _new_figure(figsize: tuple[float, float]) -> Figure:
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=figsize, layout="constrained")
+
+
+def _write_png(fig: Figure, path: Path) -> None:
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=100)
+
+
+def _write_csv(path: Path, columns: list[F64], header: str) -> None:
+    with atomic_path(path) as tmp:
+        np.savetxt(
+            tmp, np.column_stack(columns), fmt="%.12g", delimiter=",", header=header, comments=""
+        )
+
+
+@dataclass(frozen=True)
+class RegressionFit:
+    """The estimate of ``E[y | x]`` from :func:`fit_regression`.
+
+    Attributes
+    ----------
+    x, y : ndarray, shape (n,)
+        The data (units ``x_unit``, ``y_unit``).
+    grid : ndarray, shape (g,)
+        Evaluation points, spanning ``x`` (units ``x_unit``).
+    estimate : ndarray, shape (g,)
+        ``m_n`` on ``grid`` (units ``y_unit``); NaN where no sample has weight.
+    estimator : SemiRecursiveKernelRegression
+        The fitted estimator (grid mode).
+    bandwidth_rule : str
+        ``"given"``, or the rule that set ``h_1`` (``"silverman"``).
+    error_bound : ndarray of shape (g,), or None
+        Binned mode: the bound on ``|m_binned - m|`` on ``grid``.
+    x_label, y_label, x_unit, y_unit : str
+        Names and units for the axes.
+    """
+
+    x: F64
+    y: F64
+    grid: F64
+    estimate: F64
+    estimator: SemiRecursiveKernelRegression
+    bandwidth_rule: str
+    error_bound: F64 | None
+    x_label: str = "x"
+    y_label: str = "y"
+    x_unit: str = "data units"
+    y_unit: str = "data units"
+
+    def summary(self) -> dict[str, Any]:
+        """Settings and results as plain Python values (JSON-ready but for NaN)."""
+        est = self.estimator
+        h1 = float(est.bandwidth_[0])
+        n = int(self.x.shape[0])
+        return {
+            "n_samples": n,
+            "estimator": type(est).__name__,
+            "kernel": est.kernel_,
+            "bandwidth": h1,
+            "bandwidth_rule": self.bandwidth_rule,
+            "decay": est.decay,
+            "last_bandwidth": h1 * float(n) ** (-est.decay),
+            "binned": est.binned,
+            "series": est.series,
+            "error_bound_max": (
+                None if self.error_bound is None else float(np.nanmax(self.error_bound))
+            ),
+            "grid": {
+                "points": int(self.grid.shape[0]),
+                "min": float(self.grid[0]),
+                "max": float(self.grid[-1]),
+            },
+            "points_without_estimate": int(np.isnan(self.estimate).sum()),
+            "estimate": {"x": self.grid.tolist(), "m": self.estimate.tolist()},
+        }
+
+    def plot(self, ax: Axes | None = None) -> Axes:
+        """The data (at most 5000 points) and the estimate on the grid.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw into; a new figure's axes if omitted.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        if ax is None:
+            ax = _new_figure((7, 4.5)).add_subplot()
+        step = max(1, self.x.shape[0] // _PLOT_POINTS)
+        ax.plot(self.x[::step], self.y[::step], ".", ms=2, alpha=0.4, color="0.5", label="data")
+        ax.plot(self.grid, self.estimate, "-", lw=2, label="estimate m_n(x)")
+        ax.set_xlabel(f"{self.x_label} ({self.x_unit})")
+        ax.set_ylabel(f"{self.y_label} ({self.y_unit})")
+        est = self.estimator
+        ax.set_title(
+            f"{est.kernel_} kernel, h_1 = {float(est.bandwidth_[0]):.4g} {self.x_unit}, "
+            f"decay {est.decay:g}, n = {self.x.shape[0]}"
+        )
+        ax.legend()
+        return ax
+
+    def save(self, directory: str | os.PathLike[str]) -> list[Path]:
+        """Write ``estimate.csv`` (columns ``x,m``) and ``estimate.png`` into ``directory``.
+
+        Each file is written atomically; the directory is created if needed.
+
+        Returns
+        -------
+        list of Path
+            The files written.
+        """
+        out = Path(directory)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / "estimate.csv", out / "estimate.png"]
+        _write_csv(paths[0], [self.grid, self.estimate], "x,m")
+        fig = _new_figure((7, 4.5))
+        self.plot(fig.add_subplot())
+        _write_png(fig, paths[1])
+        return paths
+
+
+def fit_regression(
+    x: ArrayLike,
+    y: ArrayLike,
+    *,
+    kernel: str | KernelFunction = "gaussian",
+    bandwidth: float | str | Silverman = "silverman",
+    decay: float = 0.2,
+    grid: int = 512,
+    binned: float | None = None,
+    series: bool = False,
+    x_label: str = "x",
+    y_label: str = "y",
+) -> RegressionFit:
+    """Fit the semi-recursive estimate (eq. 14) of ``E[y | x]`` and evaluate it on a grid.
+
+    Parameters
+    ----------
+    x, y : array_like, shape (n,)
+        Inputs and outputs (any units), finite; ``x`` not constant.
+    kernel, bandwidth, decay, binned, series
+        As :class:`~flexarm.ident.SemiRecursiveKernelRegression`; the default
+        bandwidth is Silverman's rule for the last sample
+        (:mod:`flexarm.ident.bandwidth`).
+    grid : int, default 512
+        Points of the grid, equispaced from ``min(x)`` to ``max(x)`` (>= 2).
+    x_label, y_label : str
+        Names of ``x`` and ``y`` for the plot.
+
+    Returns
+    -------
+    RegressionFit
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> x = rng.uniform(-1, 1, 2000)
+    >>> res = fit_regression(x, x**2 + 0.05 * rng.normal(size=2000), grid=5)
+    >>> np.round(res.estimate, 1)
+    array([0.9, 0.3, 0. , 0.3, 0.9])
+    """
+    owner = "fit_regression"
+    xa, ya = _xy(x, y, owner, ("x", "y"))
+    g = check_int(grid, "grid", owner, minimum=2)
+    points = np.linspace(float(xa.min()), float(xa.max()), g)
+    rule = as_rule(bandwidth, "SemiRecursiveKernelRegression")
+    est = SemiRecursiveKernelRegression(
+        kernel=kernel, bandwidth=bandwidth, decay=decay, grid=points, binned=binned, series=series
+    ).fit(xa, ya)
+    return RegressionFit(
+        x=xa,
+        y=ya,
+        grid=points,
+        estimate=est.predict(points),
+        estimator=est,
+        bandwidth_rule="given" if rule is None else rule.label,
+        error_bound=None if binned is None else est.error_bound(points),
+        x_label=x_label,
+        y_label=y_label,
+    )
+
+
+@dataclass(frozen=True)
+class HammersteinFit:
+    """A Hammerstein model of ``u -> y`` from :func:`fit_hammerstein`.
+
+    Attributes
+    ----------
+    u, y : ndarray, shape (n,)
+        The data (units ``u_unit``, ``y_unit``).
+    y_hat : ndarray, shape (n,)
+        Free-run output of the model (units ``y_unit``).
+    grid : ndarray, shape (g,)
+        Points spanning ``u`` where ``phi`` is reported (units ``u_unit``).
+    phi : ndarray, shape (g,)
+        The identified nonlinearity on ``grid``.
+    model : HammersteinIdentifier
+        The fitted identifier.
+    fit_percent : float
+        Free-run fit on the data, percent.
+    u_label, y_label, u_unit, y_unit : str
+        Names and units for the axes.
+    """
+
+    u: F64
+    y: F64
+    y_hat: F64
+    grid: F64
+    phi: F64
+    model: HammersteinIdentifier
+    fit_percent: float
+    u_label: str = "u"
+    y_label: str = "y"
+    u_unit: str = "data units"
+    y_unit: str = "data units"
+
+    @property
+    def normalisation(self) -> str:
+        """``"two-point"`` with known points, else ``"up to an affine map"``."""
+        return "two-point" if self.model.known_points is not None else "up to an affine map"
+
+    def summary(self) -> dict[str, Any]:
+        """Settings and results as plain Python values."""
+        m = self.model
+        return {
+            "n_samples": int(self.u.shape[0]),
+            "n_lags": m.n_lags,
+            "known_points": m.known_points,
+            "normalisation": self.normalisation,
+            "bandwidth": m.bandwidth_,
+            "arma_order": m.order_,
+            "a": list(m.arma_.a),
+            "b": list(m.arma_.b),
+            "impulse_response": m.impulse_response_.tolist(),
+            "fit_percent": self.fit_percent,
+            "nonlinearity": {"x": self.grid.tolist(), "phi": self.phi.tolist()},
+        }
+
+    def plot(self, fig: Figure | None = None) -> Figure:
+        """Three panels: the nonlinearity, the impulse response, measured vs free-run output.
+
+        Parameters
+        ----------
+        fig : matplotlib.figure.Figure, optional
+            Figure to draw into; a new one if omitted.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        if fig is None:
+            fig = _new_figure((11, 4))
+        ax1, ax2, ax3 = fig.subplots(1, 3)
+        scale = "phi units" if self.model.known_points is not None else "normalised"
+        ax1.plot(self.grid, self.phi, lw=2)
+        ax1.set_xlabel(f"{self.u_label} ({self.u_unit})")
+        ax1.set_ylabel(f"identified nonlinearity phi ({scale})")
+        ax1.set_title(self.normalisation)
+        ir = self.model.impulse_response_
+        ax2.stem(np.arange(ir.shape[0]), ir)
+        ax2.set_xlabel("lag k (samples)")
+        ax2.set_ylabel(f"impulse response lambda_k ({self.y_unit} per phi unit)")
+        ax2.set_title(f"impulse response (ARMA order {self.model.order_})")
+        shown = slice(0, min(self.u.shape[0], 2000))
+        ax3.plot(self.y[shown], lw=1, label="measured")
+        ax3.plot(self.y_hat[shown], lw=1, label="model (free run)")
+        ax3.set_xlabel("n (samples)")
+        ax3.set_ylabel(f"{self.y_label} ({self.y_unit})")
+        ax3.set_title(f"fit {self.fit_percent:.1f} %")
+        ax3.legend(fontsize=8)
+        return fig
+
+    def save(self, directory: str | os.PathLike[str]) -> list[Path]:
+        """Write ``nonlinearity.csv`` (``u,phi``), ``impulse_response.csv``
+        (``lag,impulse_response``) and ``hammerstein.png`` into ``directory``.
+
+        Returns
+        -------
+        list of Path
+            The files written (atomically each; the directory is created if needed).
+        """
+        out = Path(directory)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / "nonlinearity.csv", out / "impulse_response.csv", out / "hammerstein.png"]
+        ir = self.model.impulse_response_
+        _write_csv(paths[0], [self.grid, self.phi], "u,phi")
+        _write_csv(paths[1], [np.arange(ir.shape[0], dtype=np.float64), ir], "lag,impulse_response")
+        _write_png(self.plot(), paths[2])
+        return paths
+
+
+def fit_hammerstein(
+    u: ArrayLike,
+    y: ArrayLike,
+    *,
+    n_lags: int = 40,
+    order: int | str = "bic",
+    known_points: KnownPoints | None = None,
+    bandwidth: float | str | Silverman = DEFAULT_BANDWIDTH,
+    grid: int = 201,
+    u_label: str = "u",
+    y_label: str = "y",
+) -> HammersteinFit:
+    """Identify a Hammerstein model of ``u -> y`` and score its free run on the same data.
+
+    Parameters
+    ----------
+    u, y : array_like, shape (n,)
+        Input (i.i.d. for the correlation approach to be exact) and output.
+    n_lags, order, known_points, bandwidth
+        As :class:`~flexarm.ident.HammersteinIdentifier`.
+    grid : int, default 201
+        Points, spanning ``u``, where the nonlinearity is reported (>= 2).
+    u_label, y_label : str
+        Names of ``u`` and ``y`` for the plot.
+
+    Returns
+    -------
+    HammersteinFit
+    """
+    owner = "fit_hammerstein"
+    ua, ya = _xy(u, y, owner, ("u", "y"))
+    g = check_int(grid, "grid", owner, minimum=2)
+    model = HammersteinIdentifier(
+        n_lags=n_lags, order=order, known_points=known_points, bandwidth=bandwidth
+    ).fit(ua, ya)
+    points = np.linspace(float(ua.min()), float(ua.max()), g)
+    return HammersteinFit(
+        u=ua,
+        y=ya,
+        y_hat=model.predict(ua),
+        grid=points,
+        phi=model.nonlinearity(points),
+        model=model,
+        fit_percent=model.score(ua, ya),
+        u_label=u_label,
+        y_label=y_label,
+    )

@@ -1,0 +1,216 @@
+"""The accumulators (one per mode) against each other and against eq. 14 written in NumPy;
+chunks against one call; ``state()``/``from_state()`` round trips for every mode."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from flexarm.ident import KERNELS, NadarayaWatson, SemiRecursiveKernelRegression
+from flexarm.ident.accumulators import (
+    Accumulator,
+    BinnedSums,
+    ExactSamples,
+    GridSums,
+    SeriesMoments,
+    Smoothing,
+    choose,
+)
+
+PROFILES = {
+    "gaussian": lambda u: np.exp(-(u**2) / 2),
+    "epanechnikov": lambda u: np.where(np.abs(u) <= 1, 0.75 * (1 - u**2), 0.0),
+    "uniform": lambda u: np.where(np.abs(u) <= 1, 0.5, 0.0),
+    "triangular": lambda u: np.where(np.abs(u) <= 1, 1 - np.abs(u), 0.0),
+}
+
+
+def sums14(q, X, y, bandwidth, decay, kernel, recursive=False):
+    """``N(q)``, ``D(q)`` of eq. 14 (or Devroye–Wagner weights) by NumPy, any ``d``."""
+    q = np.asarray(q, float).reshape(len(q), -1)
+    X = np.asarray(X, float).reshape(len(X), -1)
+    i = np.arange(1, len(X) + 1, dtype=float)
+    h = np.broadcast_to(np.asarray(bandwidth, float), (X.shape[1],))[None, :] * (
+        i[:, None] ** -decay
+    )
+    K = np.prod(PROFILES[kernel]((q[:, None, :] - X[None, :, :]) / h[None, :, :]), axis=2)
+    if recursive:
+        K = K / np.prod(h, axis=1)[None, :]
+    return K @ y, K.sum(axis=1)
+
+
+def eq14(*args, **kwargs):
+    num, den = sums14(*args, **kwargs)
+    out = np.full(num.shape, np.nan)
+    out[den > 0] = num[den > 0] / den[den > 0]
+    return out
+
+
+def setup(kernel="epanechnikov", bw=(0.3,), decay=0.2, recursive=False, grid=None, **kw):
+    return Smoothing(
+        owner="test",
+        kernel=kernel,
+        code=KERNELS.index(kernel),
+        bandwidth=np.asarray(bw, dtype=np.float64),
+        decay=decay,
+        recursive=recursive,
+        grid=None if grid is None else np.asarray(grid, dtype=np.float64).reshape(len(grid), -1),
+        **kw,
+    )
+
+
+def data(n, d=1, seed=0):
+    rng = np.random.default_rng(seed)
+    X = rng.uniform(0, 1, (n, d))
+    y = np.sin(2 * np.pi * X[:, 0]) + X[:, -1] ** 2 + 0.1 * rng.standard_normal(n)
+    return np.ascontiguousarray(X), y
+
+
+def fed(acc, X, y, cuts=()):
+    """``acc`` after the samples in chunks split at ``cuts``."""
+    edges = [0, *cuts, len(y)]
+    for a, b in itertools.pairwise(edges):
+        acc.add_chunk(np.ascontiguousarray(X[a:b]), y[a:b])
+    return acc
+
+
+GRID1 = np.linspace(-0.2, 1.2, 41)[::-1]  # unsorted on purpose, partly outside the data
+
+
+def test_choose_picks_one_class_per_mode():
+    assert choose(setup()) is ExactSamples
+    assert choose(setup(grid=GRID1)) is GridSums
+    assert choose(setup(grid=GRID1, binned=0.1)) is BinnedSums
+    assert choose(setup("gaussian", decay=0.0, grid=GRID1, series=True)) is SeriesMoments
+    for cls in (ExactSamples, GridSums, BinnedSums, SeriesMoments):
+        assert issubclass(cls, Accumulator) and cls.mode in ("exact", "grid", "binned", "series")
+
+
+@pytest.mark.parametrize("kernel", KERNELS)
+@pytest.mark.parametrize("recursive", [False, True], ids=["semi", "recursive"])
+@pytest.mark.parametrize("d", [1, 2])
+def test_exact_equals_grid_bitwise_and_both_equal_eq14(kernel, recursive, d):
+    X, y = data(300, d, seed=d)
+    grid = GRID1[:, None] if d == 1 else np.random.default_rng(5).uniform(-0.2, 1.2, (30, 2))
+    bw = [0.3, 0.5][:d]
+    exact = fed(ExactSamples(setup(kernel, bw, 0.2, recursive)), X, y)
+    on_grid = fed(GridSums(setup(kernel, bw, 0.2, recursive, grid=grid)), X, y)
+    m_exact, m_grid = exact.evaluate(grid), on_grid.evaluate(grid)
+    np.testing.assert_array_equal(m_exact, m_grid)
+    ref = eq14(grid, X, y, bw, 0.2, kernel, recursive=recursive)
+    np.testing.assert_allclose(m_grid, ref, rtol=1e-11, atol=1e-13, equal_nan=True)
+    assert np.array_equal(np.isnan(m_grid), np.isnan(ref))
+    N, D = sums14(grid, X, y, bw, 0.2, kernel, recursive=recursive)
+    num, den = on_grid.grid_sums()
+    np.testing.assert_allclose(num, N, rtol=1e-11, atol=1e-12)
+    np.testing.assert_allclose(den, D, rtol=1e-11, atol=1e-12)
+
+
+@pytest.mark.parametrize("kernel", ["gaussian", "epanechnikov", "triangular"])
+@pytest.mark.parametrize("r", [0.2, 0.4])
+def test_binned_is_within_its_bound_of_grid_sums(kernel, r):
+    X, y = data(8000, seed=3)
+    y = y + 1.0
+    s = setup(kernel, (0.2,), 0.2, grid=GRID1)
+    exact = fed(GridSums(s), X, y)
+    binned = fed(BinnedSums(setup(kernel, (0.2,), 0.2, grid=GRID1, binned=r)), X, y)
+    N, D = exact.sums()
+    Nb, Db = binned.sums()
+    where = np.arange(len(GRID1))
+    eN, eD = binned.sum_error_bounds(where)
+    tiny = len(X) * 2.0**-52 * (np.abs(N) + D)  # the exact sums' own rounding
+    assert np.all(np.abs(Nb - N) <= eN + tiny) and np.all(np.abs(Db - D) <= eD + tiny)
+    assert np.max(np.abs(Db - D)) > 0  # binning happened
+
+
+@pytest.mark.parametrize("recursive", [False, True], ids=["semi", "recursive"])
+def test_series_equals_grid_sums_to_rounding(recursive):
+    X, y = data(3000, seed=4)
+    kw = {"kernel": "gaussian", "bw": (0.05,), "decay": 0.0, "recursive": recursive}
+    exact = fed(GridSums(setup(**kw, grid=GRID1)), X, y)
+    series = fed(SeriesMoments(setup(**kw, grid=GRID1, series=True)), X, y)
+    ok = ~np.isnan(exact.evaluate(GRID1[:, None]))
+    np.testing.assert_allclose(
+        series.evaluate(GRID1[:, None])[ok], exact.evaluate(GRID1[:, None])[ok], rtol=1e-11
+    )
+    np.testing.assert_allclose(series.sums()[1], exact.sums()[1], rtol=1e-11, atol=1e-300)
+
+
+MODES = {
+    "exact": lambda: setup("triangular", (0.3,), 0.25),
+    "exact-2d": lambda: setup("gaussian", (0.3, 0.4), 0.2),
+    "grid": lambda: setup("uniform", (0.3,), 0.3, recursive=True, grid=GRID1),
+    "grid-2d": lambda: setup("epanechnikov", (0.4, 0.5), 0.2, grid=np.c_[GRID1, GRID1[::-1]]),
+    "binned": lambda: setup("gaussian", (0.2,), 0.2, grid=GRID1, binned=0.2),
+    "series": lambda: setup("gaussian", (0.05,), 0.0, grid=GRID1, series=True),
+}
+
+
+def queries(s):
+    return s.grid if s.grid is not None else np.random.default_rng(1).uniform(0, 1, (25, s.d))
+
+
+@pytest.mark.parametrize("mode", sorted(MODES))
+def test_chunks_equal_one_call_bitwise(mode):
+    s = MODES[mode]()
+    X, y = data(5000, s.d, seed=6)
+    whole = fed(choose(s)(s), X, y)
+    parts = fed(choose(s)(s), X, y, cuts=(1, 2, 17, 999, 1000, 3001))
+    assert parts.n_samples == whole.n_samples == 5000
+    np.testing.assert_array_equal(parts.evaluate(queries(s)), whole.evaluate(queries(s)))
+    for k, v in whole.state().items():
+        np.testing.assert_array_equal(parts.state()[k], v, err_msg=k)
+
+
+@pytest.mark.parametrize("mode", sorted(MODES))
+def test_state_round_trip_resumes_bitwise(mode):
+    s = MODES[mode]()
+    X, y = data(5000, s.d, seed=7)
+    never_stopped = fed(choose(s)(s), X, y)
+    first = fed(choose(s)(s), X[:2222], y[:2222])
+    state = first.state()
+    assert all(isinstance(v, np.ndarray) and v.dtype != object for v in state.values())
+    resumed = type(first).from_state(s, {k: v.copy() for k, v in state.items()})
+    assert resumed.n_samples == 2222 and resumed.mode == first.mode
+    for k, v in state.items():
+        np.testing.assert_array_equal(resumed.state()[k], v, err_msg=k)
+    resumed.add_chunk(np.ascontiguousarray(X[2222:]), y[2222:])
+    np.testing.assert_array_equal(resumed.evaluate(queries(s)), never_stopped.evaluate(queries(s)))
+    # the state is a copy: feeding the original afterwards does not change it
+    first.add_chunk(np.ascontiguousarray(X[2222:2230]), y[2222:2230])
+    assert int(state["n_samples"]) == 2222
+
+
+@pytest.mark.parametrize(
+    ("cls", "kw"),
+    [
+        (SemiRecursiveKernelRegression, {"kernel": "triangular", "bandwidth": 0.3}),
+        (SemiRecursiveKernelRegression, {"bandwidth": 0.3, "grid": GRID1}),
+        (SemiRecursiveKernelRegression, {"bandwidth": 0.2, "grid": GRID1, "binned": 0.1}),
+        (NadarayaWatson, {"bandwidth": 0.05, "grid": GRID1, "series": True}),
+    ],
+    ids=["exact", "grid", "binned", "series"],
+)
+def test_estimator_file_is_the_hyperparameters_plus_the_accumulator_state(tmp_path, cls, kw):
+    X, y = data(1500, seed=8)
+    est = cls(**kw).fit(X, y)
+    est.save(tmp_path / "e.npz")
+    with np.load(tmp_path / "e.npz", allow_pickle=False) as z:
+        saved = {k: z[k] for k in z.files}
+    acc_state = est._acc.state()
+    for k, v in acc_state.items():  # the accumulator's state, unchanged
+        np.testing.assert_array_equal(saved[k], v, err_msg=k)
+    header = set(saved) - set(acc_state)
+    assert header <= {
+        "format",
+        "estimator",
+        "kernel",
+        "bandwidth",
+        "decay",
+        "n_features_in",
+        "series",
+        "grid",
+        "binned",
+    }
