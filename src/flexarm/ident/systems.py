@@ -27,7 +27,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_real, validate_real_fields
+from .._validation import check_array, check_real, check_rng, validate_real_fields
 from ..errors import InvalidTypeError, InvalidValueError
 
 __all__ = [
@@ -41,7 +41,6 @@ __all__ = [
     "Quantizer",
     "Saturation",
     "Sign",
-    "as_generator",
     "fit_percent",
     "simulate_hammerstein",
     "spectral_radius",
@@ -456,18 +455,6 @@ def fit_percent(y: ArrayLike, y_hat: ArrayLike) -> float:
     return 100.0 * (1.0 - float(np.linalg.norm(ya - yh)) / spread)
 
 
-def as_generator(rng: Any, owner: str) -> np.random.Generator:
-    """``rng`` as a :class:`numpy.random.Generator` (from ``None``, a seed or a Generator)."""
-    if rng is None or (isinstance(rng, int | np.integer) and not isinstance(rng, bool)):
-        return np.random.default_rng(None if rng is None else int(rng))
-    if isinstance(rng, np.random.Generator):
-        return rng
-    raise InvalidTypeError(
-        f"The 'rng' parameter of {owner} must be a numpy Generator, an int seed or None. "
-        f"Got {type(rng).__name__} instead."
-    )
-
-
 def simulate_hammerstein(
     phi: Any,
     a: ArrayLike,
@@ -521,7 +508,7 @@ def simulate_hammerstein(
             f"The 'u' parameter of {owner} must hold at least 1 sample. Got 0 instead."
         )
     sigma = check_real(noise_std, "noise_std", owner, nonnegative=True)
-    gen = as_generator(rng, owner)
+    gen = check_rng(rng, owner)
     w = np.asarray(phi(ua), dtype=np.float64)
     if w.shape != ua.shape:
         raise InvalidValueError(

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ...ident.bandwidth import Silverman
 from ...ident.hammerstein import HammersteinIdentifier, fit_percent
 from ...ident.regression import SemiRecursiveKernelRegression
 from ...model.joints import LinearJoint, NonlinearJoint
@@ -235,7 +236,7 @@ def _curve(
     y: F64,
     truth: Callable[[F64], ArrayLike],
     quantile: float,
-    relative_bandwidth: float,
+    smoothing: float,
     units: tuple[str, str],
     grid_size: int = 401,
 ) -> CurveEstimate:
@@ -244,7 +245,7 @@ def _curve(
     grid = np.linspace(lo, hi, grid_size)
     reg = SemiRecursiveKernelRegression(
         kernel="epanechnikov",
-        bandwidth=relative_bandwidth * float(np.std(x)),
+        bandwidth=Silverman(smoothing),
         decay=0.2,
         grid=grid,
     ).fit(x, y)

@@ -5,9 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..._io import JSONValue
-from ..._validation import check_int, check_option, check_real
+from ..._validation import check_int, check_option, check_real, check_rng
 from ...errors import InvalidTypeError, InvalidValueError
-from ...ident.systems import as_generator
 from ...model.arm import FlexibleArm
 from .estimation import estimate_friction, estimate_stiffness, fit_hammerstein, windup_secants
 from .experiment import joint_test_arm, measure, run_excitation
@@ -29,8 +28,8 @@ def identify_joint(
     torque_measurement: str = "motor-balance",
     friction_window: int = 25,
     quasi_static_fraction: float = 0.5,
-    stiffness_bandwidth: float = 0.02,
-    friction_bandwidth: float = 0.05,
+    stiffness_bandwidth: float = 0.022,
+    friction_bandwidth: float = 0.056,
     n_lags: int = 40,
     validation_fraction: float = 1.0 / 3.0,
     rng: np.random.Generator | int | None = 0,
@@ -58,8 +57,11 @@ def identify_joint(
         curve: those with the smallest measured deflection rate
         ``|qd_m - qd|`` (0 < fraction <= 1).
     stiffness_bandwidth, friction_bandwidth : float
-        ``h_1`` of the kernel regressions as a fraction of the regressor's
-        standard deviation (> 0).
+        Bandwidths of the kernel regressions as multiples ``c`` of Silverman's
+        rule (``Silverman(c)``, :mod:`flexarm.ident.bandwidth`: the one rule of
+        flexarm's defaults), > 0. Narrow (about 1/45 and 1/18 of the rule), because
+        the stiffness and friction curves have features (the soft windup, the
+        Stribeck dip) much narrower than the regressors' spread.
     n_lags : int
         Impulse-response length of the Hammerstein model, in holds (>= 10).
     validation_fraction : float
@@ -116,7 +118,7 @@ def identify_joint(
             f"The 'validation_fraction' parameter of {_OWNER} must be in (0, 1). "
             f"Got {validation_fraction} instead."
         )
-    gen = as_generator(rng, _OWNER)
+    gen = check_rng(rng, _OWNER)
     n_holds = excitation.n_holds
     if n_holds < 4 * n_lags or n_holds < 300:
         raise InvalidValueError(
