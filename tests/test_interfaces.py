@@ -60,6 +60,11 @@ PUBLIC = [
     "control/controllers.py",
     "control/adaptive.py",
     "sensing/sensors.py",
+    *sorted(
+        str(p.relative_to(SRC))
+        for p in (SRC / "studies").rglob("*.py")
+        if p.name != "__init__.py" and not p.name.startswith("_")
+    ),
 ]
 
 
@@ -92,6 +97,18 @@ def _run(code: str) -> str:
 def test_import_flexarm_loads_no_numba_scipy_or_matplotlib():
     out = _run(
         "import sys, flexarm\n"
+        "print(sorted(m for m in ('numba', 'scipy', 'matplotlib') if m in sys.modules))"
+    )
+    assert out == "[]"
+
+
+def test_the_command_line_parser_loads_nothing_heavy():
+    """``flexarm --help`` builds every command's parser without Numba, SciPy or
+    Matplotlib: commands import the library when they run."""
+    out = _run(
+        "import sys\n"
+        "from flexarm.cli import build_parser\n"
+        "build_parser().format_help()\n"
         "print(sorted(m for m in ('numba', 'scipy', 'matplotlib') if m in sys.modules))"
     )
     assert out == "[]"
