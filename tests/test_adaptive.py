@@ -11,6 +11,7 @@ import pytest
 import flexarm as fa
 from flexarm.control.adaptive import FuzzyAdaptiveJTPD, tip_deflections
 from flexarm.control.controllers import JacobianTransposePD
+from flexarm.control.signals import reference_size
 from flexarm.fuzzy import FuzzySystem, Rule, Triangle, Variable, paper_system
 from flexarm.sim import simulate
 from flexarm.sim.scenario import Scenario
@@ -34,7 +35,7 @@ def signals(arm, seed, scale=0.05):
     n = arm.n_links
     y = rng.normal(size=2 * n + 4 + sum(arm.n_modes))
     y[2 * n + 4 :] *= scale
-    r = rng.normal(size=6 + 2 * n)
+    r = rng.normal(size=reference_size(n))
     return y, r
 
 

@@ -48,7 +48,17 @@ WITHIN: dict[str, list[str]] = {
         "arm",
     ],
     "sensing": ["delays", "sensors"],
-    "control": ["signals", "trajectories", "shapers", "controllers", "adaptive", "linearize"],
+    "control": [
+        "signals",
+        "trajectories",
+        "shapers",
+        "statespace",
+        "controllers",
+        "adaptive",
+        "feedforward",
+        "linearize",
+        "sampling",
+    ],
     "sim": [
         "metrics",
         "results",

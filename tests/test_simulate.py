@@ -45,7 +45,7 @@ def test_compiled_jacobian_transpose_law_matches_numpy(paper):
     p = c.parameters(paper)
     for _ in range(5):
         y = rng.normal(size=2 * 2 + 4 + 2)
-        r = rng.normal(size=10)
+        r = rng.normal(size=14)  # reference_size(2)
         kp = np.array([[120.0, 5.0], [-3.0, 90.0]])
         kd = np.diag([10.0, 14.0])
         expected = paper.jacobian(y[:2]).T @ (kp @ (r[:2] - y[4:6]) + kd @ (r[2:4] - y[6:8]))
@@ -55,7 +55,7 @@ def test_compiled_jacobian_transpose_law_matches_numpy(paper):
 def test_compiled_joint_pd_matches_formula(paper):
     c = JointPD(kp=[50.0, 30.0], kd=4.0)
     y = np.array([0.1, -0.2, 0.3, 0.4, 0, 0, 0, 0, 0, 0])
-    r = np.zeros(10)
+    r = np.zeros(14)  # reference_size(2)
     r[6:8], r[8:10] = [0.5, 0.5], [1.0, -1.0]
     tau = c(0.0, y, r, c.parameters(paper), np.zeros(0))
     np.testing.assert_allclose(tau, [50 * 0.4 + 4 * 0.7, 30 * 0.7 + 4 * -1.4])
@@ -344,6 +344,8 @@ def test_signal_layout_tiles_the_vectors(n_links, n_modes):
         (s.r_acceleration(n), 2),
         (s.r_angles(n), n),
         (s.r_rates(n), n),
+        (s.r_angle_accelerations(n), n),
+        (s.r_feedforward(n), n),
     ]
     for parts, size in ((y_parts, s.measurement_size(n, n_modes)), (r_parts, s.reference_size(n))):
         cover = np.zeros(size, dtype=int)
@@ -398,7 +400,7 @@ def test_jacobian_transpose_law_uses_the_sensed_points_jacobian(paper):
     params = ctrl.parameters_for(paper, PointSensor(1, 0.5))
     rng = np.random.default_rng(11)
     y = rng.normal(size=2 * 2 + 4 + 2)
-    r = rng.normal(size=10)
+    r = rng.normal(size=14)  # reference_size(2)
     tau = ctrl(0.0, y, r, params, np.zeros(0))
     # the point's rigid Jacobian by central differences of its position
     theta = y[:2]

@@ -52,6 +52,7 @@ from .signals import (
     r_position,
     r_rates,
     r_velocity,
+    reference_size,
     y_angles,
     y_point,
     y_point_rate,
@@ -174,6 +175,9 @@ class Controller:
     """
 
     name = "controller"
+    feedforward = False
+    """Whether :func:`flexarm.simulate` adds the reference's rigid feedforward torques to
+    this law's output by default (its ``feedforward=None``)."""
 
     @property
     def cfunc(self) -> CFunc:  # pragma: no cover - interface
@@ -199,8 +203,17 @@ class Controller:
         params: NDArray[np.float64],
         state: NDArray[np.float64],
     ) -> NDArray[np.float64]:
-        """Evaluate the compiled law once from Python (``state`` is updated in place)."""
-        n_links = (r.shape[0] - 6) // 2
+        """Evaluate the compiled law once from Python (``state`` is updated in place).
+
+        ``r`` has the layout of :mod:`flexarm.control.signals` (its length gives the
+        number of links); returns the torques, shape (n_links,), N m.
+        """
+        n_links = (np.shape(r)[0] - reference_size(0)) // (reference_size(1) - reference_size(0))
+        if n_links < 1 or reference_size(n_links) != np.shape(r)[0]:
+            raise InvalidValueError(
+                f"The 'r' parameter of {type(self).__name__} must have the length of a "
+                f"reference vector (6 + 4 n_links). Got {np.shape(r)[0]} instead."
+            )
         tau = np.zeros(n_links)
         y = np.ascontiguousarray(y, dtype=float)
         r = np.ascontiguousarray(r, dtype=float)

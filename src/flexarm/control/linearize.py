@@ -1,4 +1,18 @@
-"""Linearised closed loops: why a loop diverges, before simulating it.
+"""Linear analysis of the arm: the open-loop plant, and closed loops through compiled laws.
+
+:func:`linearize` gives the open-loop arm about a rest configuration (links
+undeflected, motors at the link angles: an equilibrium under zero torque, as
+there is no gravity) as a :class:`~flexarm.control.statespace.StateSpace`
+from the joint torques (N m) to a chosen output: what a sensor measures, the
+deflected tip, or the joint angles; positions, and velocities with
+``rates=True``. At rest the velocity terms are quadratic in the rates and drop
+out, so the model is exact to first order::
+
+    M(q0) dq'' = -K dq - D dq' + B dtau,   A = [[0, I], [-M^-1 K, -M^-1 D]],
+
+``K`` the modal stiffness and the joint springs' tangent stiffness at zero
+deflection, ``D`` the modal and motor damping and the friction's slope at
+zero velocity (``MakkarFriction.slope``).
 
 :func:`closed_loop_matrix` linearises ``x' = f(x)``, ``x = (q, dq)``, of an arm
 under a controller reading a sensor, in continuous time (the law applied
@@ -12,13 +26,15 @@ zero-order hold.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arm import FlexibleArm
-from ..model.kinematics import lever_lengths, rigid_point
+from ..model.kinematics import lever_lengths, rigid_jacobian, rigid_point
 from ..sensing.sensors import Sensor, check_sensor
 from .controllers import Controller
 from .signals import (
@@ -32,14 +48,24 @@ from .signals import (
     y_point_rate,
     y_rates,
 )
+from .statespace import StateSpace
 
-__all__ = ["closed_loop_matrix", "closed_loop_poles"]
+__all__ = [
+    "OUTPUTS",
+    "closed_loop_matrix",
+    "closed_loop_poles",
+    "linearize",
+    "measure",
+    "rest_state",
+]
+
+OUTPUTS = ("sensor", "tip", "joints")
 
 F64 = NDArray[np.float64]
 _OWNER = "closed_loop_matrix"
 
 
-def _measure(arm: FlexibleArm, sensor: Sensor, q: F64, dq: F64, h: float) -> F64:
+def measure(arm: FlexibleArm, sensor: Sensor, q: F64, dq: F64, h: float = 1e-5) -> F64:
     """The measurement ``y`` (:mod:`flexarm.control.signals`) of the state, undelayed
     (``h``: the difference step, rad or modal units, of the point's velocity)."""
     n_links = arm.n_links
@@ -48,8 +74,9 @@ def _measure(arm: FlexibleArm, sensor: Sensor, q: F64, dq: F64, h: float) -> F64
     cols = arm.motor_slice if arm.has_flexible_joints else slice(0, n_links)
     y[ya : ya + n_links], y[yr : yr + n_links] = q[cols], dq[cols]
     link, distance, _ = sensor.resolve(arm)
-    if link < 0:  # rigid kinematics of the encoder angles
-        pos, vel = rigid_point(arm.link_lengths, q[cols], dq[cols])
+    if link < 0 or sensor.model == "paper":  # rigid kinematics of the encoder angles
+        levers = arm.link_lengths if link < 0 else lever_lengths(arm.link_lengths, link, distance)
+        pos, vel = rigid_point(levers, q[cols], dq[cols])
         assert vel is not None
         y[yp : yp + 2], y[yv : yv + 2] = pos, vel
     else:  # the deflected point; its velocity is linear in dq (central difference)
@@ -131,7 +158,7 @@ def closed_loop_matrix(
 
     def field(x: F64) -> F64:
         q, dq = x[:n], x[n:]
-        y = _measure(arm, sensor, q, dq, 1e-5)
+        y = measure(arm, sensor, q, dq, 1e-5)
         tau = controller(0.0, y, r, params, controller.initial_state(arm))
         return np.concatenate([dq, arm.forward_dynamics(q, dq, tau)])
 
@@ -170,3 +197,146 @@ def closed_loop_poles(
     a = closed_loop_matrix(arm, controller, position, sensor, elbow=elbow, step=step)
     poles = np.asarray(np.linalg.eigvals(a), dtype=np.complex128)
     return poles[np.argsort(-poles.real, kind="stable")]
+
+
+def rest_state(arm: FlexibleArm, theta: ArrayLike) -> F64:
+    """``q`` at rest at joint angles ``theta`` (rad): links undeflected, motors (flexible
+    joints) at the link angles. Shape (n_dof,)."""
+    q0 = np.zeros(arm.n_dof)
+    q0[: arm.n_links] = theta
+    if arm.has_flexible_joints:
+        q0[arm.motor_slice] = theta
+    return q0
+
+
+def _damping(arm: FlexibleArm) -> F64:
+    """Linear damping at rest: modal and motor damping and the joints' friction slope
+    at zero velocity, on the side it acts (N m s per coordinate rate)."""
+    d = np.array(arm.damping_matrix, dtype=float)
+    m0 = arm.motor_slice.start
+    for i, jt in enumerate(arm.joints or ()):
+        if jt.friction is not None:
+            k = m0 + i if arm.joint_friction == "motor" else i
+            d[k, k] += float(jt.friction.slope(0.0))
+    return d
+
+
+def _position_jacobian(fn: Callable[[F64], F64], q0: F64, step: float = 1e-6) -> F64:
+    """``d fn / d q`` at ``q0`` by central differences (fn: (n_dof,) -> (k,))."""
+    cols = []
+    for j in range(q0.shape[0]):
+        e = np.zeros_like(q0)
+        e[j] = step
+        cols.append((fn(q0 + e) - fn(q0 - e)) / (2 * step))
+    return np.stack(cols, axis=1)
+
+
+def linearize(
+    arm: FlexibleArm,
+    theta: ArrayLike | None = None,
+    *,
+    position: ArrayLike | None = None,
+    elbow: str = "positive",
+    sensor: Sensor | None = None,
+    output: str = "sensor",
+    rates: bool = False,
+) -> StateSpace:
+    """The open-loop arm linearised at rest (module docstring), continuous time.
+
+    Parameters
+    ----------
+    arm : FlexibleArm
+    theta : array_like, shape (n_links,), optional
+        Joint angles of the rest configuration, rad (default: straight, zeros).
+    position : array_like, shape (2,), optional
+        Instead of ``theta``: the end effector's rest point, m (two-link arms,
+        inverse kinematics on the ``elbow`` branch).
+    elbow : {"positive", "negative"}
+    sensor : JointSensor, PointSensor or TipSensor, optional
+        For ``output="sensor"`` (default: joint encoders).
+    output : {"sensor", "tip", "joints"}
+        What the sensor measures (the encoder angles; the point, deflected or,
+        for ``model="paper"``, the rigid kinematics of the encoder angles), the
+        deflected tip (x, y), or the link-side joint angles.
+    rates : bool
+        Add the outputs' rates after the positions.
+
+    Returns
+    -------
+    StateSpace
+        States ``(q, dq)`` named after :attr:`FlexibleArm.coordinate_names`
+        (rates prefixed ``d``), inputs ``tau1..tauN`` (N m), outputs in m or rad
+        (and m/s, rad/s). Use ``.discretize(dt)`` for the sampled model and
+        ``.to_control()`` for python-control.
+    """
+    owner = "linearize"
+    if not isinstance(arm, FlexibleArm):
+        raise InvalidTypeError(
+            f"The 'arm' parameter of {owner} must be a FlexibleArm. "
+            f"Got {type(arm).__name__} instead."
+        )
+    check_option(output, "output", owner, OUTPUTS)
+    sensor = check_sensor(sensor, owner)
+    if not isinstance(rates, bool):
+        raise InvalidTypeError(f"The 'rates' parameter of {owner} must be a bool. Got {rates!r}.")
+    n, n_links = arm.n_dof, arm.n_links
+    if position is not None:
+        if theta is not None:
+            raise InvalidValueError(
+                f"The 'position' parameter of {owner} excludes 'theta'. Got both instead."
+            )
+        check_option(elbow, "elbow", owner, ("positive", "negative"))
+        angles = np.asarray(
+            arm.inverse_kinematics(check_array(position, "position", owner, shape=(2,)), elbow),
+            dtype=float,
+        )
+    elif theta is None:
+        angles = np.zeros(n_links)
+    else:
+        angles = check_array(theta, "theta", owner, shape=(n_links,))
+    q0 = rest_state(arm, angles)
+    mass = np.asarray(arm.mass_matrix(q0).real, dtype=float)
+    a = np.zeros((2 * n, 2 * n))
+    a[:n, n:] = np.eye(n)
+    a[n:, :n] = -np.linalg.solve(mass, arm.stiffness_matrix)
+    a[n:, n:] = -np.linalg.solve(mass, _damping(arm))
+    b = np.zeros((2 * n, n_links))
+    b[n:] = np.linalg.solve(mass, arm.input_matrix)
+    cq, names = _output_map(arm, sensor, output, q0)
+    c = np.zeros((cq.shape[0] * (2 if rates else 1), 2 * n))
+    c[: cq.shape[0], :n] = cq
+    if rates:
+        c[cq.shape[0] :, n:] = cq  # at rest, d/dt g(q) = (dg/dq) dq
+        names = [*names, *(f"d{s}" for s in names)]
+    coords = arm.coordinate_names
+    return StateSpace(
+        a, b, c, None, None,
+        [*coords, *(f"d{s}" for s in coords)], [f"tau{i + 1}" for i in range(n_links)], names,
+    )  # fmt: skip
+
+
+def _output_map(arm: FlexibleArm, sensor: Sensor, output: str, q0: F64) -> tuple[F64, list[str]]:
+    """``d y / d q`` at ``q0`` and the output names."""
+    n_links = arm.n_links
+    encoders = arm.motor_slice if arm.has_flexible_joints else slice(0, n_links)
+    if output == "joints":
+        cq = np.zeros((n_links, arm.n_dof))
+        cq[:, :n_links] = np.eye(n_links)
+        return cq, [f"theta{i + 1}" for i in range(n_links)]
+    if output == "tip":
+        return _position_jacobian(arm.tip_position, q0), ["x_tip", "y_tip"]
+    link, distance, _ = sensor.resolve(arm)
+    if link < 0:
+        cq = np.zeros((n_links, arm.n_dof))
+        cq[:, encoders] = np.eye(n_links)
+        return cq, [arm.coordinate_names[k] for k in range(arm.n_dof)[encoders]]
+    if sensor.model == "paper":
+        levers = lever_lengths(arm.link_lengths, link, distance)
+        cq = np.zeros((2, arm.n_dof))
+        cq[:, encoders] = rigid_jacobian(levers, q0[encoders])
+        return cq, ["x_sensor", "y_sensor"]
+
+    def point(q: F64) -> F64:
+        return arm.point_position(q, link, distance)
+
+    return _position_jacobian(point, q0), ["x_sensor", "y_sensor"]

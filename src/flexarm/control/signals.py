@@ -15,13 +15,17 @@ Measurement ``y``, length :func:`measurement_size` ``= 2 N + 4 + M``::
     y[y_modes(N):+M]         the links' modal coordinates (what a strain sensor or an
                              estimator would give; the fuzzy law reads link deflections)
 
-Reference ``r``, length :func:`reference_size` ``= 6 + 2 N``::
+Reference ``r``, length :func:`reference_size` ``= 6 + 4 N``::
 
     r[r_position(N):+2]      commanded position of the controlled point, m
     r[r_velocity(N):+2]      velocity, m/s
     r[r_acceleration(N):+2]  acceleration, m/s**2
     r[r_angles(N):+N]        joint angles from inverse kinematics, rad
     r[r_rates(N):+N]         joint rates, rad/s
+    r[r_angle_accelerations(N):+N]  joint accelerations, rad/s**2
+    r[r_feedforward(N):+N]   feedforward joint torques, N m (the rigid inverse
+                             dynamics of the reference; zero unless asked for).
+                             The simulator adds them to the law's output.
 
 Every module and every compiled function that reads or writes these vectors
 uses the offset functions below (plain Python functions that Numba compiles
@@ -35,7 +39,9 @@ from numba.extending import register_jitable
 __all__ = [
     "measurement_size",
     "r_acceleration",
+    "r_angle_accelerations",
     "r_angles",
+    "r_feedforward",
     "r_position",
     "r_rates",
     "r_velocity",
@@ -115,6 +121,18 @@ def r_rates(n_links: int) -> int:
 
 
 @register_jitable
+def r_angle_accelerations(n_links: int) -> int:
+    """Offset of the joint-acceleration references in ``r``."""
+    return 6 + 2 * n_links
+
+
+@register_jitable
+def r_feedforward(n_links: int) -> int:
+    """Offset of the feedforward torques in ``r``."""
+    return 6 + 3 * n_links
+
+
+@register_jitable
 def reference_size(n_links: int) -> int:
     """Length of ``r`` for ``n_links`` links."""
-    return r_rates(n_links) + n_links
+    return r_feedforward(n_links) + n_links

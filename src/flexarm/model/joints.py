@@ -143,6 +143,21 @@ class MakkarFriction:
 
     __call__ = friction
 
+    def slope(self, velocity: ArrayLike) -> NDArray[np.float64]:
+        """``df/dv`` in N m s/rad at ``velocity`` (rad/s): at 0 it is
+        ``g1 (g2 - g3) + g4 g5 + g6``, the viscous coefficient a linearisation sees."""
+        v = _as_float_array(velocity, "velocity", "MakkarFriction")
+
+        def sech2(x: NDArray[np.float64]) -> NDArray[np.float64]:
+            return 1.0 - np.tanh(x) ** 2
+
+        out: NDArray[np.float64] = (
+            self.g1 * (self.g2 * sech2(self.g2 * v) - self.g3 * sech2(self.g3 * v))
+            + self.g4 * self.g5 * sech2(self.g5 * v)
+            + self.g6
+        )
+        return out
+
     @property
     def params(self) -> NDArray[np.float64]:
         """``(g1, ..., g6)`` as an array of shape (6,)."""

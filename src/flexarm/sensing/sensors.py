@@ -7,11 +7,30 @@ end effector (layout in :mod:`flexarm.control.signals`):
   angles for flexible joints); position and velocity follow from the rigid
   kinematics of those angles. Noise and quantisation act on the angles.
 * :class:`PointSensor` — noncollocated: the Cartesian position and velocity of
-  the point ``distance`` metres along link ``link`` (0-based), deflection
-  included (:meth:`flexarm.FlexibleArm.point_position`). ``PointSensor(1, 0.5)``
-  is the paper's sensor 0.5 m from the elbow. Noise and quantisation act on the
-  Cartesian signals.
+  the point ``distance`` metres along link ``link`` (0-based). ``PointSensor(1,
+  0.5)`` is the paper's sensor 0.5 m from the elbow. Noise and quantisation act
+  on the Cartesian signals.
 * :class:`TipSensor` — the end effector (the last link's tip).
+
+Two models of a sensed point (``model=``), named for what they are:
+
+``"physical"`` (default)
+    The deflected point itself (:meth:`flexarm.FlexibleArm.point_position`):
+    what a camera, a laser tracker or an accelerometer-based estimate at that
+    point would give on a real arm.
+``"paper"``
+    What Sasiadek et al. (2014, Sec. V) simulated: the rigid direct kinematics
+    (their eqs. 9–10) of the measured joint angles and rates, with the sensor's
+    distance along its link in place of that link's length — the deflection is
+    not in it. Its transport delay (``delay=`` of the simulation) stands for the
+    wave travel, as in the paper. The encoders read the motor angles with
+    flexible joints.
+
+For the joint encoders the two coincide (:class:`JointSensor` has
+``model="physical"``). Both point models are commanded alike: the operational-
+space reference is the sensed point's position on the rigid arm following the
+joint references, and the law's Jacobian is that point's
+(:func:`flexarm.control.controllers.operational_lengths`).
 
 Noise is Gaussian, drawn from the simulation's ``rng`` (seeded runs are
 reproducible); quantisation rounds to a multiple of the resolution. A transport
@@ -33,9 +52,32 @@ from .._validation import check_int, check_real, validate_real_fields
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.plant import Plant
 
-__all__ = ["JointSensor", "PointSensor", "Sensor", "TipSensor", "check_sensor", "parse_sensor"]
+__all__ = [
+    "SENSOR_MODELS",
+    "JointSensor",
+    "PointSensor",
+    "Sensor",
+    "TipSensor",
+    "check_sensor",
+    "parse_sensor",
+]
 
 _NOISE_FIELDS = ("noise_std", "rate_noise_std", "quantization", "rate_quantization")
+SENSOR_MODELS = ("physical", "paper")
+"""Models of a sensed point: the deflected point, or the paper's rigid kinematics."""
+
+
+def _check_model(sensor: object, owner: str) -> None:
+    model = getattr(sensor, "model", None)
+    if not isinstance(model, str):
+        raise InvalidTypeError(
+            f"The 'model' parameter of {owner} must be a str. Got {type(model).__name__} instead."
+        )
+    if model not in SENSOR_MODELS:
+        raise InvalidValueError(
+            f"The 'model' parameter of {owner} must be one of {SENSOR_MODELS}. "
+            f"Got {model!r} instead."
+        )
 
 
 @dataclass(frozen=True)
@@ -58,6 +100,7 @@ class JointSensor:
     rate_noise_std: float = 0.0
     quantization: float = 0.0
     rate_quantization: float = 0.0
+    model = "physical"  # the encoders: both models coincide
     name = "joint"
 
     def __post_init__(self) -> None:
@@ -85,6 +128,9 @@ class PointSensor:
         Noise standard deviations of the position (m) and velocity (m/s).
     quantization, rate_quantization : float
         Resolutions of the position (m) and velocity (m/s); 0 for none.
+    model : {"physical", "paper"}
+        The deflected point, or the paper's rigid kinematics of the measured
+        joint angles at that point (module docstring).
     """
 
     link: int
@@ -93,11 +139,13 @@ class PointSensor:
     rate_noise_std: float = 0.0
     quantization: float = 0.0
     rate_quantization: float = 0.0
+    model: str = "physical"
     name = "point"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "link", check_int(self.link, "link", "PointSensor", minimum=0))
         validate_real_fields(self, "PointSensor", nonnegative=("distance", *_NOISE_FIELDS))
+        _check_model(self, "PointSensor")
 
     def resolve(self, arm: Plant) -> tuple[int, float, NDArray[np.float64]]:
         if self.link >= arm.n_links:
@@ -115,22 +163,26 @@ class PointSensor:
         return self.link, self.distance, phi
 
     def describe(self, arm: Plant) -> str:
-        return f"point:{self.link}:{self.distance:g}"
+        spec = f"point:{self.link}:{self.distance:g}"
+        return spec if self.model == "physical" else f"{spec} (paper model)"
 
 
 @dataclass(frozen=True)
 class TipSensor:
-    """The end effector: the last link's tip, deflection included (same noise
-    parameters as :class:`PointSensor`)."""
+    """The end effector: the last link's tip (same parameters as
+    :class:`PointSensor`; ``model="paper"`` is the paper's end-effector sensor,
+    the rigid kinematics of the measured joint angles)."""
 
     noise_std: float = 0.0
     rate_noise_std: float = 0.0
     quantization: float = 0.0
     rate_quantization: float = 0.0
+    model: str = "physical"
     name = "tip"
 
     def __post_init__(self) -> None:
         validate_real_fields(self, "TipSensor", nonnegative=_NOISE_FIELDS)
+        _check_model(self, "TipSensor")
 
     def at(self, arm: Plant) -> PointSensor:
         last = arm.n_links - 1
@@ -141,13 +193,14 @@ class TipSensor:
             self.rate_noise_std,
             self.quantization,
             self.rate_quantization,
+            self.model,
         )
 
     def resolve(self, arm: Plant) -> tuple[int, float, NDArray[np.float64]]:
         return self.at(arm).resolve(arm)
 
     def describe(self, arm: Plant) -> str:
-        return "tip"
+        return "tip" if self.model == "physical" else "tip (paper model)"
 
 
 @runtime_checkable
@@ -162,6 +215,8 @@ class Sensor(Protocol):
 
     @property
     def name(self) -> str: ...
+    @property
+    def model(self) -> str: ...
     @property
     def noise_std(self) -> float: ...
     @property
@@ -190,9 +245,10 @@ def check_sensor(sensor: object, owner: str) -> Sensor:
 _POINT = re.compile(r"^point:(?P<link>[^:]+):(?P<distance>[^:]+)$")
 
 
-def parse_sensor(spec: str, **noise: float) -> Sensor:
+def parse_sensor(spec: str, model: str = "physical", **noise: float) -> Sensor:
     """A sensor from its command-line form: ``joint``, ``tip`` or ``point:LINK:DISTANCE``
-    (link 0-based, distance in m: ``point:1:0.5`` is 0.5 m from the elbow)."""
+    (link 0-based, distance in m: ``point:1:0.5`` is 0.5 m from the elbow), with
+    the point ``model`` (``"physical"`` or ``"paper"``; the encoders have one)."""
     if not isinstance(spec, str):
         raise InvalidTypeError(
             f"The 'sensor' parameter must be a str. Got {type(spec).__name__} instead."
@@ -200,7 +256,7 @@ def parse_sensor(spec: str, **noise: float) -> Sensor:
     if spec == "joint":
         return JointSensor(**noise)
     if spec == "tip":
-        return TipSensor(**noise)
+        return TipSensor(**noise, model=model)
     m = _POINT.match(spec)
     if m is None:
         raise InvalidValueError(
@@ -216,4 +272,4 @@ def parse_sensor(spec: str, **noise: float) -> Sensor:
             f"distance in m. Got {spec!r} instead."
         ) from None
     check_real(distance, "distance", "PointSensor", nonnegative=True)
-    return PointSensor(link, distance, **noise)
+    return PointSensor(link, distance, **noise, model=model)

@@ -31,9 +31,12 @@ from numpy.typing import ArrayLike, NDArray
 from .._io import JSONValue
 from .._validation import check_array, check_int, check_option, check_real, check_rng
 from ..control.controllers import Controller, JacobianTransposePD
+from ..control.feedforward import RigidDynamics
 from ..control.signals import measurement_size
 from ..control.trajectories import Square, Trajectory, check_trajectory
 from ..errors import InvalidTypeError, InvalidValueError
+from ..model.arm import FlexibleArm
+from ..model.kinematics import lever_lengths
 from ..model.plant import Plant, check_plant
 from ..sensing.delays import DelayModel, discretize, pade_state_space
 from ..sensing.sensors import Sensor, check_sensor
@@ -67,6 +70,8 @@ def simulate(
     method: str = "rk4",
     rng: np.random.Generator | int | None = None,
     progress: bool | None = None,
+    feedforward: bool | None = None,
+    check_sampling: bool = True,
 ) -> SimulationResult:
     """Simulate ``arm`` under ``controller`` tracking ``trajectory``.
 
@@ -115,6 +120,16 @@ def simulate(
     progress : bool, optional
         Show a progress bar on stderr (default: when stderr is a terminal and
         the run is long).
+    feedforward : bool, optional
+        Add the rigid inverse dynamics of the joint references
+        (:class:`flexarm.control.feedforward.RigidDynamics`) to the law's torque
+        (two-link arms). Default: what the controller asks for
+        (``controller.feedforward``; the observer-based law does).
+    check_sampling : bool
+        Before running, linearise the loop at the start and refuse a control
+        period ``dt`` at which it is sampled-data unstable, with the pole and the
+        period that would work (:mod:`flexarm.control.sampling`; undelayed,
+        noise-free). False runs it anyway (to watch it diverge).
 
     Returns
     -------
@@ -158,6 +173,12 @@ def simulate(
             f"Got {delay_reference!r} instead."
         )
     generator = check_rng(rng, _OWNER)
+    for name, flag in (("feedforward", feedforward), ("check_sampling", check_sampling)):
+        if not isinstance(flag, bool) and not (name == "feedforward" and flag is None):
+            raise InvalidTypeError(
+                f"The '{name}' parameter of {_OWNER} must be a bool. Got {flag!r} instead."
+            )
+    use_ff = bool(controller.feedforward) if feedforward is None else feedforward
     N, n = arm.n_links, arm.n_dof
     n_steps = round(duration / dt)
     if n_steps < 1:
@@ -178,6 +199,7 @@ def simulate(
         delay=delay.delay if delay_reference else 0.0,
         point=(link, distance) if short_of_tip else None,
         elbow=elbow,
+        feedforward=_rigid_dynamics(arm) if use_ff else None,
         owner=_OWNER,
     )
 
@@ -210,6 +232,13 @@ def simulate(
         n_y=ny,
     )
     prime_delay_line(arm.arrays, sensed, state)
+    if check_sampling and isinstance(arm, FlexibleArm):
+        from ..control.sampling import check_sampling as check
+
+        verdict = check(arm, controller, sensor, x0[:N], refs.reference[0], params,
+                        state.ctrl_state.copy(), dt)  # fmt: skip
+        if verdict.period_too_long:  # (a loop unstable in continuous time diverges anyway)
+            raise InvalidValueError(verdict.message(_OWNER))
     out: LoopOutputs = {  # every row up to the last one reached is written
         "q": np.empty((n_steps + 1, n)),
         "dq": np.empty((n_steps + 1, n)),
@@ -254,6 +283,7 @@ def simulate(
         "dt_s": dt,
         "substeps": substeps,
         "method": method,
+        "feedforward": use_ff,
         "duration_s": n_steps * dt,
         "n_links": N,
         "n_modes": list(arm.n_modes),
@@ -352,14 +382,27 @@ def _sensor_arrays(
             ad, bd, cd, dd = discretize(*pade_state_space(delay.delay, delay.order), h)
             pade = (ad, bd[:, 0], cd[0], dd[0])
             effective = delay.delay
+    rigid = link >= 0 and sensor.model == "paper"
+    lengths = np.asarray(arm.link_lengths, dtype=float)
     arrays = sensor_arrays(
         link=link,
+        rigid=rigid,
         distance=distance,
         phi=phi,
-        levers=np.asarray(arm.link_lengths, dtype=float),
+        levers=lever_lengths(lengths, link, distance) if rigid else lengths,
         delay_steps=delay_steps,
         pade=pade,
         noise=noise,
         resolution=resolution,
     )
     return arrays, effective
+
+
+def _rigid_dynamics(arm: Plant) -> RigidDynamics:
+    if not isinstance(arm, FlexibleArm) or arm.n_links != 2:
+        raise InvalidValueError(
+            f"The 'feedforward' parameter of {_OWNER} needs a two-link FlexibleArm (rigid "
+            f"inverse dynamics of the joint references). Got {type(arm).__name__} with "
+            f"{arm.n_links} links instead."
+        )
+    return RigidDynamics.of(arm)

@@ -26,7 +26,7 @@ from numba.core.ccallback import CFunc
 from numpy.typing import NDArray
 
 from .._compile import njit_runtime_free
-from ..control.signals import y_angles, y_modes, y_point, y_rates
+from ..control.signals import r_feedforward, y_angles, y_modes, y_point, y_rates
 from ..errors import InvalidValueError
 from ..model.arrays import ArmArrays, Workspace, make_workspace
 from ..model.dynamics import is_two_links_one_mode, point_kinematics
@@ -54,10 +54,13 @@ class SensorArrays(NamedTuple):
     """The sensor as plain arrays (build with :func:`sensor_arrays`).
 
     link: int64 (1,) — link of the sensed point, -1 for the joint encoders.
+    rigid: int64 (1,) — 1: the point is the rigid kinematics of the encoder
+        angles (the paper's sensor model), 0: the deflected point.
     distance: (1,) — distance of the point along its link, m.
     phi: (n_modes of link,) — mode shapes at the point.
-    levers: (n_links,) — lever lengths of the rigid kinematics that turn the
-        encoder angles into the sensed position (joint encoders), m.
+    levers: (n_links,) — lever lengths of the rigid kinematics of the encoder
+        angles (the link lengths for the joint encoders, the point's for the
+        paper's model), m.
     delay_steps: int64 (1,) — exact delay in substeps (0: none unless Padé).
     pade_ad, pade_bd, pade_cd, pade_dd: discrete Padé filter (order p): (p, p), (p,),
         (p,), (1,); p = 0 for no Padé.
@@ -66,6 +69,7 @@ class SensorArrays(NamedTuple):
     """
 
     link: I64
+    rigid: I64
     distance: F64
     phi: F64
     levers: F64
@@ -81,6 +85,7 @@ class SensorArrays(NamedTuple):
 def sensor_arrays(
     *,
     link: int,
+    rigid: bool,
     distance: float,
     phi: F64,
     levers: F64,
@@ -95,6 +100,8 @@ def sensor_arrays(
     ----------
     link : int
         Link of the sensed point (0-based), or -1 for the joint encoders.
+    rigid : bool
+        The point is the rigid kinematics of the encoder angles (``levers``).
     distance : float
         Distance of the point along its link, m (0 for the encoders).
     phi : ndarray, shape (n_modes of link,)
@@ -116,6 +123,7 @@ def sensor_arrays(
     )
     out = SensorArrays(
         link=np.array([link], dtype=np.int64),
+        rigid=np.array([int(bool(rigid))], dtype=np.int64),
         distance=np.array([distance], dtype=np.float64),
         phi=np.ascontiguousarray(phi, dtype=np.float64),
         levers=np.ascontiguousarray(levers, dtype=np.float64),
@@ -202,7 +210,8 @@ def _collocated(q: F64, dq: F64, model: ArmArrays, i: int, n_links: int) -> tupl
 @nb.njit(cache=True, nogil=True, inline="always")
 def sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> None:
     """The raw (true, undelayed) sensed signal: the encoder angles then rates, or
-    the point's position then velocity.
+    the point's position then velocity (deflected, or the paper's rigid
+    kinematics of the encoder angles).
 
     Inlined where :func:`run` calls it (the model's and the sensor's arrays would
     otherwise be passed through a call at every control step).
@@ -214,6 +223,27 @@ def sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> 
             a, r = _collocated(q, dq, model, i, n_links)
             out[i] = a
             out[n_links + i] = r
+    elif sensor.rigid[0]:
+        # the paper's sensor model: rigid kinematics of the encoder angles
+        px = 0.0
+        py = 0.0
+        vx = 0.0
+        vy = 0.0
+        phi = 0.0
+        phid = 0.0
+        for i in range(n_links):
+            a, r = _collocated(q, dq, model, i, n_links)
+            phi += a
+            phid += r
+            lever = sensor.levers[i]
+            px += lever * np.cos(phi)
+            py += lever * np.sin(phi)
+            vx -= lever * np.sin(phi) * phid
+            vy += lever * np.cos(phi) * phid
+        out[0] = px
+        out[1] = py
+        out[2] = vx
+        out[3] = vy
     else:
         point_kinematics(q, dq, model, link, sensor.distance[0], sensor.phi, out)
 
@@ -278,6 +308,7 @@ def run(
     two_links_one_mode = is_two_links_one_mode(model)
     o_angle, o_rate = y_angles(n_links), y_rates(n_links)
     o_point, o_modes = y_point(n_links), y_modes(n_links)
+    o_ff = r_feedforward(n_links)
     for k in range(k0, k1):
         # ---- measure: the delayed sensed signal, then noise and quantisation
         sense(q, dq, model, sensor, raw)
@@ -362,6 +393,7 @@ def run(
             n_links,
         )
         for i in range(n_links):
+            tau[i] += rk[o_ff + i]  # feedforward (zero unless asked for)
             lim = torque_limit[i]
             if tau[i] > lim:
                 tau[i] = lim

@@ -29,7 +29,9 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import check_option, check_real
 from ..control.signals import (
     r_acceleration,
+    r_angle_accelerations,
     r_angles,
+    r_feedforward,
     r_position,
     r_rates,
     r_velocity,
@@ -43,6 +45,8 @@ __all__ = ["ReferenceSignals", "joint_path", "joint_reference", "reference_signa
 
 F64 = NDArray[np.float64]
 PathFunction = Callable[[F64], tuple[F64, F64, F64]]
+Feedforward = Callable[[F64, F64, F64], F64]
+"""``feedforward(theta, dtheta, ddtheta) -> tau``, arrays of shape (K, n_links)."""
 
 
 class KinematicArm(Protocol):
@@ -240,6 +244,7 @@ def reference_signals(
     point: tuple[int, float] | None = None,
     elbow: str = "positive",
     singularity_tol: float = 1e-6,
+    feedforward: Feedforward | None = None,
     owner: str = "simulate",
 ) -> ReferenceSignals:
     """The reference ``r`` at the control instants ``t`` (module docstring).
@@ -262,6 +267,10 @@ def reference_signals(
         Inverse-kinematics branch.
     singularity_tol : float
         Passed to :func:`joint_path`.
+    feedforward : callable, optional
+        ``feedforward(theta, dtheta, ddtheta) -> tau`` (arrays (K, n_links); e.g.
+        :class:`flexarm.control.feedforward.RigidDynamics`): the torques put in
+        the reference's feedforward columns (zero without it).
     owner : str
         Named in error messages.
     """
@@ -277,11 +286,17 @@ def reference_signals(
     r[:, rp : rp + 2], r[:, rv : rv + 2], r[:, ra : ra + 2] = pos, vel, acc
     initial = None
     if n_links == 2:
-        theta, dtheta, _ = joint_path(
-            arm, pos, vel, elbow=elbow, singularity_tol=singularity_tol, times=t, owner=owner
+        theta, dtheta, ddtheta = joint_path(
+            arm, pos, vel, acc, elbow=elbow, singularity_tol=singularity_tol, times=t, owner=owner
         )
+        assert ddtheta is not None
         r[:, r_angles(n_links) : r_angles(n_links) + n_links] = theta
         r[:, r_rates(n_links) : r_rates(n_links) + n_links] = dtheta
+        r[:, r_angle_accelerations(n_links) : r_angle_accelerations(n_links) + n_links] = ddtheta
+        if feedforward is not None:
+            r[:, r_feedforward(n_links) : r_feedforward(n_links) + n_links] = feedforward(
+                theta, dtheta, ddtheta
+            )
         start = desired[:1]
         initial = joint_path(
             arm,
@@ -299,10 +314,10 @@ def reference_signals(
             r[:, rp : rp + 2], r[:, rv : rv + 2] = p_r, v_r
             dt = float(t[1] - t[0]) if t.shape[0] > 1 else 1.0
             r[:, ra : ra + 2] = np.gradient(v_r, dt, axis=0) if t.shape[0] > 2 else 0.0
-    elif point is not None:
+    elif point is not None or feedforward is not None:
+        what = "sensor" if point is not None else "feedforward"
         raise InvalidValueError(
-            f"The 'sensor' parameter of {owner} may be a point short of the end effector "
-            f"only on a two-link arm (its command needs inverse kinematics). Got a point "
-            f"on link {point[0]} of a {n_links}-link arm instead."
+            f"The '{what}' parameter of {owner} needs joint references, which need inverse "
+            f"kinematics (two-link arms). Got a {n_links}-link arm instead."
         )
     return ReferenceSignals(reference=r, desired=desired, initial_angles=initial)

@@ -1,0 +1,267 @@
+"""The sampled-data check: is a control period short enough for this loop?
+
+A controller runs at its period ``dt`` with a zero-order hold. Linearised at
+rest at the start of a run, the loop is
+
+.. math:: x_{k+1} = \\Phi x_k + \\Gamma \\tau_k, \\quad
+          \\tau_k = D_c C_y x_k + C_c s_k, \\quad s_{k+1} = B_c C_y x_k + A_c s_k,
+
+with ``Phi, Gamma`` the exact zero-order-hold discretisation of the open-loop arm
+(:func:`flexarm.control.linearize.linearize`), ``C_y`` the linearised
+measurement (the sensor's signals in the layout of
+:mod:`flexarm.control.signals`, undelayed and noise-free) and
+``A_c, B_c, C_c, D_c`` the controller's compiled law differentiated in its
+measurement and its state (central differences). The loop is sampled-data
+stable when every eigenvalue of that matrix lies in the unit disc.
+
+For a static law (no controller state), the continuous closed loop
+``A + B D_c C_y`` says why: a fast real pole ``lambda`` needs roughly
+``dt |lambda| < 2`` under a zero-order hold. :func:`check_sampling` finds the
+largest stable period by bisection and :func:`flexarm.simulate` refuses a
+period beyond it before running (``check_sampling=False`` runs it anyway).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InvalidValueError
+from ..model.arm import FlexibleArm
+from ..sensing.delays import discretize
+from ..sensing.sensors import Sensor
+from .controllers import Controller
+from .linearize import linearize, measure
+
+__all__ = ["LinearLoop", "SamplingCheck", "check_sampling", "linear_loop"]
+
+F64 = NDArray[np.float64]
+_TOLERANCE = 1e-6  # |z| up to 1 + this counts as marginal (rigid modes under no feedback)
+
+
+@dataclass(frozen=True)
+class SamplingCheck:
+    """The result of :func:`check_sampling`.
+
+    Attributes
+    ----------
+    dt : float
+        The period checked, s.
+    spectral_radius : float
+        Largest ``|z|`` of the linearised sampled loop.
+    fastest_pole : complex
+        The continuous closed loop's pole of largest modulus, rad/s (static laws;
+        NaN for a law with state).
+    max_period : float or None
+        The largest stable period, s (static laws; None when unknown).
+    continuous_stable : bool
+        The loop with the law applied continuously is stable (True when unknown:
+        a law with state).
+    """
+
+    dt: float
+    spectral_radius: float
+    fastest_pole: complex
+    max_period: float | None
+
+    continuous_stable: bool = True
+
+    @property
+    def stable(self) -> bool:
+        """The sampled loop is stable at ``dt``."""
+        return self.spectral_radius <= 1.0 + _TOLERANCE
+
+    @property
+    def period_too_long(self) -> bool:
+        """The period is what makes the loop unstable: the sampled loop is unstable
+        while the loop applied continuously is stable (a static law)."""
+        return not self.stable and self.continuous_stable and self.max_period is not None
+
+    def message(self, owner: str = "simulate") -> str:
+        """One sentence for an error: which pole, which period would work."""
+        head = (
+            f"The 'dt' parameter of {owner} must make the sampled loop stable: linearised at "
+            f"the start, the loop sampled at dt = {self.dt:g} s has a discrete pole at |z| = "
+            f"{self.spectral_radius:.4g} > 1"
+        )
+        if np.isfinite(self.fastest_pole):
+            head += (
+                f"; the continuous closed loop's fastest pole is {_fmt(self.fastest_pole)} rad/s"
+            )
+        if self.max_period is not None:
+            use = float(f"{0.8 * self.max_period:.1g}")
+            head += (
+                f", and a zero-order hold needs dt < {self.max_period:.3g} s. Use dt <= {use:g} s "
+                "(or an arm with hub inertia, or lower gains)"
+            )
+        else:
+            head += ". Use a shorter period or a law designed for this one"
+        return head + ", or pass check_sampling=False to run it anyway."
+
+
+def _fmt(z: complex) -> str:
+    def num(x: float) -> str:
+        return f"{x:,.0f}" if abs(x) >= 100 else f"{x:.4g}"
+
+    if abs(z.imag) < 1e-9 * max(1.0, abs(z)):
+        return num(z.real)
+    return f"{num(z.real)} ± {num(abs(z.imag))}j"
+
+
+def _controller_jacobians(
+    controller: Controller,
+    params: F64,
+    state: F64,
+    y0: F64,
+    r0: F64,
+) -> tuple[F64, F64, F64, F64]:
+    """``(A_c, B_c, C_c, D_c)``: the law's next state and torque differentiated in
+    its state and measurement, by central differences."""
+    n_s, n_y = state.shape[0], y0.shape[0]
+
+    def law(y: F64, s: F64) -> tuple[F64, F64]:
+        s2 = s.copy()
+        tau = controller(0.0, y, r0, params, s2)
+        return tau, s2
+
+    tau0, _ = law(y0, state)
+    m = tau0.shape[0]
+    a_c, b_c = np.zeros((n_s, n_s)), np.zeros((n_s, n_y))
+    c_c, d_c = np.zeros((m, n_s)), np.zeros((m, n_y))
+    for j in range(n_y):
+        h = 1e-6 * max(1.0, abs(y0[j]))
+        e = np.zeros(n_y)
+        e[j] = h
+        (tp, sp), (tm, sm) = law(y0 + e, state), law(y0 - e, state)
+        d_c[:, j], b_c[:, j] = (tp - tm) / (2 * h), (sp - sm) / (2 * h)
+    for j in range(n_s):
+        h = 1e-6 * max(1.0, abs(state[j]))
+        e = np.zeros(n_s)
+        e[j] = h
+        (tp, sp), (tm, sm) = law(y0, state + e), law(y0, state - e)
+        c_c[:, j], a_c[:, j] = (tp - tm) / (2 * h), (sp - sm) / (2 * h)
+    return a_c, b_c, c_c, d_c
+
+
+@dataclass(frozen=True)
+class LinearLoop:
+    """The linearised loop's pieces (module docstring): the open-loop arm ``(A, B)``,
+    the measurement ``C_y`` and the law's ``(A_c, B_c, C_c, D_c)``."""
+
+    A: F64
+    B: F64
+    C_y: F64
+    A_c: F64
+    B_c: F64
+    C_c: F64
+    D_c: F64
+
+    @property
+    def is_static(self) -> bool:
+        """The law's state does not feed its torque (``C_c = 0``)."""
+        return not np.any(self.C_c)
+
+    def continuous(self) -> F64:
+        """``A + B D_c C_y``: the loop with the law applied continuously, its state held."""
+        return self.A + self.B @ self.D_c @ self.C_y
+
+    def sampled(self, dt: float) -> F64:
+        """The sampled loop's matrix at period ``dt`` (exact zero-order hold)."""
+        n2, m = self.B.shape
+        phi, gamma, _, _ = discretize(self.A, self.B, np.zeros((1, n2)), np.zeros((1, m)), dt)
+        n_s = self.A_c.shape[0]
+        out = np.zeros((n2 + n_s, n2 + n_s))
+        out[:n2, :n2] = phi + gamma @ self.D_c @ self.C_y
+        out[:n2, n2:] = gamma @ self.C_c
+        out[n2:, :n2] = self.B_c @ self.C_y
+        out[n2:, n2:] = self.A_c
+        return out
+
+
+def linear_loop(
+    arm: FlexibleArm,
+    controller: Controller,
+    sensor: Sensor,
+    theta: F64,
+    reference: F64,
+    params: F64,
+    state: F64,
+) -> LinearLoop:
+    """The loop linearised at rest at ``theta`` (rad), with the controller's parameters,
+    state and a reference vector."""
+    n = arm.n_dof
+    plant = linearize(arm, theta)
+    q0 = np.zeros(n)
+    q0[: arm.n_links] = theta
+    if arm.has_flexible_joints:
+        q0[arm.motor_slice] = theta
+    y0 = measure(arm, sensor, q0, np.zeros(n), 1e-5)
+    c_y = np.zeros((y0.shape[0], 2 * n))
+    h = 1e-7
+    for j in range(2 * n):
+        x = np.zeros(2 * n)
+        x[j] = h
+        yp = measure(arm, sensor, q0 + x[:n], x[n:], 1e-5)
+        ym = measure(arm, sensor, q0 - x[:n], -x[n:], 1e-5)
+        c_y[:, j] = (yp - ym) / (2 * h)
+    a_c, b_c, c_c, d_c = _controller_jacobians(controller, params, state, y0, reference)
+    return LinearLoop(plant.A, plant.B, c_y, a_c, b_c, c_c, d_c)
+
+
+def _radius(matrix: F64) -> float:
+    return float(np.max(np.abs(np.linalg.eigvals(matrix)))) if matrix.size else 0.0
+
+
+def check_sampling(
+    arm: FlexibleArm,
+    controller: Controller,
+    sensor: Sensor,
+    theta: F64,
+    reference: F64,
+    params: F64,
+    state: F64,
+    dt: float,
+) -> SamplingCheck:
+    """Check the period ``dt`` (module docstring) at rest at ``theta`` (rad), with the
+    controller's parameters, initial state and first reference vector.
+
+    The largest stable period is searched for static laws only (a law whose state
+    feeds its torque, e.g. an observer, was designed for its period).
+    """
+    if not dt > 0:
+        raise InvalidValueError(f"The 'dt' parameter of check_sampling must be > 0. Got {dt}.")
+    loop = linear_loop(arm, controller, sensor, theta, reference, params, state)
+    radius = _radius(loop.sampled(dt))
+    fastest: complex = complex("nan")
+    max_period = None
+    continuous_stable = True
+    if loop.is_static:
+        poles = np.linalg.eigvals(loop.continuous())
+        fastest = complex(poles[np.argmax(np.abs(poles))])
+        continuous_stable = bool(np.all(poles.real < 1e-9 * max(1.0, float(np.max(np.abs(poles))))))
+        if radius > 1.0 + _TOLERANCE and continuous_stable:
+            max_period = _largest_stable_period(loop, dt)
+    return SamplingCheck(dt, radius, fastest, max_period, continuous_stable)
+
+
+def _largest_stable_period(loop: LinearLoop, dt: float) -> float | None:
+    """Bisection below ``dt`` for the stability boundary (None if even ``dt / 2**14``
+    is unstable)."""
+
+    def stable(h: float) -> bool:
+        return _radius(loop.sampled(h)) <= 1.0 + _TOLERANCE
+
+    lo = dt
+    for _ in range(14):
+        lo /= 2.0
+        if stable(lo):
+            break
+    else:
+        return None
+    hi = 2.0 * lo
+    while hi - lo > 1e-4 * lo:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if stable(mid) else (lo, mid)
+    return lo
