@@ -57,7 +57,10 @@ WITHIN: dict[str, list[str]] = {
         "adaptive",
         "feedforward",
         "linearize",
+        "design",
         "sampling",
+        "reflected",
+        "lqg",
     ],
     "sim": [
         "metrics",

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import InvalidTypeError, InvalidValueError
 from ..sensing.delays import DELAY_METHODS
-from ..sensing.sensors import PointSensor, Sensor, parse_sensor
+from ..sensing.sensors import SENSOR_MODELS, PointSensor, Sensor, parse_sensor
 from ..sim.results import RESULT_FILES, SimulationError
 from ..sim.scenario_schema import (
     CONTROLLERS,
@@ -35,6 +35,10 @@ _OPTION_OF_KEY = {
     "sensor.kind": "--sensor",
     "sensor.link": "--sensor",
     "sensor.distance": "--sensor",
+    "sensor.model": "--sensor-model",
+    "simulation.smoothing": "--smoothing",
+    "simulation.feedforward": "--feedforward",
+    "simulation.check_sampling": "--check-sampling",
     "delay.delay": "--delay",
     "delay.method": "--delay-method",
     "delay.order": "--pade-order",
@@ -82,6 +86,10 @@ def _overrides(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
         if isinstance(sensor, PointSensor):
             put("sensor.link", sensor.link)
             put("sensor.distance", sensor.distance)
+    put("sensor.model", args.sensor_model)
+    put("simulation.smoothing", args.smoothing)
+    put("simulation.feedforward", args.feedforward)
+    put("simulation.check_sampling", args.check_sampling)
     put("delay.delay", args.delay)
     put("delay.method", args.delay_method)
     put("delay.order", args.pade_order)
@@ -239,7 +247,9 @@ def add_parser(sub: Any) -> None:
         help="pd: the paper's Jacobian-transpose PD gains from the first link's first "
         "frequency (default); jt-pd: JacobianTransposePD with the scenario's kp, kd; "
         "joint-pd: JointPD; fuzzy: the paper's gains with the fuzzy adaptive law "
-        "(FuzzyAdaptiveJTPD; set ks and law in the scenario file)",
+        "(FuzzyAdaptiveJTPD; set ks and law in the scenario file); lqg: observer-based "
+        "LQG from the sensor alone with rigid feedforward; reflected: PD on the reflected "
+        "output (alpha in the scenario file)",
     )
     sim.add_argument(
         "--sensor",
@@ -247,6 +257,12 @@ def add_parser(sub: Any) -> None:
         metavar="joint|tip|point:LINK:DISTANCE",
         help="joint encoders (default), the end effector, or a point DISTANCE m along link "
         "LINK (0-based: point:1:0.5 is 0.5 m from the elbow)",
+    )
+    sim.add_argument(
+        "--sensor-model",
+        choices=SENSOR_MODELS,
+        help="physical: the deflected point (default); paper: the rigid kinematics of the "
+        "joint angles at that point, as the paper simulated it",
     )
     sim.add_argument(
         "--delay",
@@ -275,6 +291,26 @@ def add_parser(sub: Any) -> None:
         "is sampled-data unstable at 1 ms)",
     )
     sim.add_argument("--substeps", type=int, metavar="N", help="RK4 steps per period (default 1)")
+    sim.add_argument(
+        "--smoothing",
+        type=float,
+        metavar="SECONDS",
+        help="zero-phase smoothing of the reference path (default 0: none; 0.1 cuts the "
+        "square's corners symmetrically)",
+    )
+    sim.add_argument(
+        "--feedforward",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="add the rigid inverse dynamics of the reference (default: the controller's "
+        "choice; on for lqg)",
+    )
+    sim.add_argument(
+        "--check-sampling",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="refuse a control period beyond the sampled loop's stability bound (default on)",
+    )
     sim.add_argument("--seed", type=int, metavar="N", help="seed of the sensor noise")
     sim.add_argument("--out", metavar="DIR", help="write the results into DIR (see below)")
     sim.add_argument("--json", action="store_true", help="print a JSON summary on stdout")

@@ -31,7 +31,6 @@ range of ``ks``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numba as nb
 import numpy as np
@@ -42,6 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..fuzzy import CompiledFuzzySystem, FuzzySystem, evaluate_into, paper_system, workspace_size
+from ..fuzzy.compiled import pack_system, unpack_system
 from ..model.plant import Plant
 from ..sensing.sensors import Sensor
 from .controllers import (
@@ -65,68 +65,6 @@ ADAPTATION_LAWS = ("scaled", "damping")
 _HEAD = 4
 
 
-def _pack_fls(c: CompiledFuzzySystem) -> F64:
-    """A compiled fuzzy system as one float vector (integer arrays bit-cast)."""
-
-    def ints(a: NDArray[Any]) -> F64:
-        return np.ascontiguousarray(a, dtype=np.int64).ravel().view(np.float64)
-
-    sizes = np.array(
-        [c.term_type.size, c.rule_ante.shape[0], c.rule_ante.shape[1], c.out_par.shape[0]],
-        dtype=np.int64,
-    )
-    return np.concatenate(
-        [
-            ints(sizes),
-            ints(c.term_type),
-            c.term_par.ravel(),
-            ints(c.term_input),
-            c.input_bounds.ravel(),
-            ints(c.rule_ante),
-            ints(c.rule_cons),
-            c.out_par.ravel(),
-            ints(c.ops),
-            c.out_range.ravel(),
-        ]
-    )
-
-
-@nb.njit(cache=True, nogil=True)
-def _unpack_fls(p: F64, o: int) -> CompiledFuzzySystem:  # pragma: no cover - compiled
-    """Views of ``p[o:]`` as a :class:`CompiledFuzzySystem` (no copy, no allocation)."""
-    sizes = p[o : o + 4].view(np.int64)
-    nt, nr, ni, nk = sizes[0], sizes[1], sizes[2], sizes[3]
-    o += 4
-    term_type = p[o : o + nt].view(np.int64)
-    o += nt
-    term_par = p[o : o + 4 * nt].reshape((nt, 4))
-    o += 4 * nt
-    term_input = p[o : o + nt].view(np.int64)
-    o += nt
-    input_bounds = p[o : o + 2 * ni].reshape((ni, 2))
-    o += 2 * ni
-    rule_ante = p[o : o + nr * ni].view(np.int64).reshape((nr, ni))
-    o += nr * ni
-    rule_cons = p[o : o + nr].view(np.int64)
-    o += nr
-    out_par = p[o : o + 4 * nk].reshape((nk, 4))
-    o += 4 * nk
-    ops = p[o : o + 3].view(np.int64)
-    o += 3
-    out_range = p[o : o + 3]
-    return CompiledFuzzySystem(
-        term_type=term_type,
-        term_par=term_par,
-        term_input=term_input,
-        input_bounds=input_bounds,
-        rule_ante=rule_ante,
-        rule_cons=rule_cons,
-        out_par=out_par,
-        ops=ops,
-        out_range=out_range,
-    )
-
-
 @nb.njit(cache=True, nogil=True)
 def _fuzzy_jt_pd(
     t: float, y: F64, r: F64, p: F64, s: F64, tau: F64
@@ -138,7 +76,7 @@ def _fuzzy_jt_pd(
     lam0 = p[o + 2]
     m = int(p[o + 3])
     o += _HEAD
-    system = _unpack_fls(p, o + n * m)
+    system = unpack_system(p, o + n * m)
     # scratch: s[0] = last lambda, s[1] = last gain, s[2:2+n] = FLS inputs, then the workspace
     x = s[2 : 2 + n]
     modal = y[y_modes(n) :]
@@ -302,7 +240,7 @@ class FuzzyAdaptiveJTPD(Controller):
                 lengths,
                 np.array(head, float),
                 tips.ravel(),
-                _pack_fls(compiled),
+                pack_system(compiled),
             ]
         )
 

@@ -195,6 +195,15 @@ class Controller:
         use the sensed point's Jacobian."""
         return self.parameters(arm)
 
+    def design(
+        self, arm: Plant, sensor: Sensor | None, dt: float, reference: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """The ``params`` vector the simulator passes, knowing the control period
+        ``dt`` (s) and the run's reference vectors (shape (K, 6 + 4 N)). Default:
+        :meth:`parameters_for`; laws designed for a period (:class:`flexarm.control.lqg.LQG`)
+        override it."""
+        return self.parameters_for(arm, sensor)
+
     def __call__(
         self,
         t: float,

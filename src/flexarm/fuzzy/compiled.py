@@ -9,7 +9,15 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CompiledFuzzySystem", "evaluate", "evaluate_into", "evaluate_many", "workspace_size"]
+__all__ = [
+    "CompiledFuzzySystem",
+    "evaluate",
+    "evaluate_into",
+    "evaluate_many",
+    "pack_system",
+    "unpack_system",
+    "workspace_size",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -255,3 +263,66 @@ def evaluate_many(system: CompiledFuzzySystem, x: FloatArray) -> FloatArray:
     for i in range(x.shape[0]):
         out[i] = evaluate_into(system, x[i], buf)
     return out
+
+
+def pack_system(c: CompiledFuzzySystem) -> FloatArray:
+    """A compiled fuzzy system as one float vector (integer arrays bit-cast), to travel
+    in a compiled controller's parameter vector; :func:`unpack_system` reads it back."""
+
+    def ints(a: NDArray[np.int64]) -> FloatArray:
+        return np.ascontiguousarray(a, dtype=np.int64).ravel().view(np.float64)
+
+    sizes = np.array(
+        [c.term_type.size, c.rule_ante.shape[0], c.rule_ante.shape[1], c.out_par.shape[0]],
+        dtype=np.int64,
+    )
+    return np.concatenate(
+        [
+            ints(sizes),
+            ints(c.term_type),
+            c.term_par.ravel(),
+            ints(c.term_input),
+            c.input_bounds.ravel(),
+            ints(c.rule_ante),
+            ints(c.rule_cons),
+            c.out_par.ravel(),
+            ints(c.ops),
+            c.out_range.ravel(),
+        ]
+    )
+
+
+@nb.njit(cache=True, nogil=True)
+def unpack_system(p: FloatArray, o: int) -> CompiledFuzzySystem:  # pragma: no cover - compiled
+    """Views of ``p[o:]`` as a :class:`CompiledFuzzySystem` (no copy, no allocation)."""
+    sizes = p[o : o + 4].view(np.int64)
+    nt, nr, ni, nk = sizes[0], sizes[1], sizes[2], sizes[3]
+    o += 4
+    term_type = p[o : o + nt].view(np.int64)
+    o += nt
+    term_par = p[o : o + 4 * nt].reshape((nt, 4))
+    o += 4 * nt
+    term_input = p[o : o + nt].view(np.int64)
+    o += nt
+    input_bounds = p[o : o + 2 * ni].reshape((ni, 2))
+    o += 2 * ni
+    rule_ante = p[o : o + nr * ni].view(np.int64).reshape((nr, ni))
+    o += nr * ni
+    rule_cons = p[o : o + nr].view(np.int64)
+    o += nr
+    out_par = p[o : o + 4 * nk].reshape((nk, 4))
+    o += 4 * nk
+    ops = p[o : o + 3].view(np.int64)
+    o += 3
+    out_range = p[o : o + 3]
+    return CompiledFuzzySystem(
+        term_type=term_type,
+        term_par=term_par,
+        term_input=term_input,
+        input_bounds=input_bounds,
+        rule_ante=rule_ante,
+        rule_cons=rule_cons,
+        out_par=out_par,
+        ops=ops,
+        out_range=out_range,
+    )

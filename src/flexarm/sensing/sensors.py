@@ -94,17 +94,22 @@ class JointSensor:
         Encoder resolution, rad (0: none).
     rate_quantization : float
         Rate resolution, rad/s (0: none).
+    model : {"physical", "paper"}
+        Accepted for symmetry with the point sensors; the two models of the
+        encoders are the same (the paper's joint sensor is the rigid kinematics
+        of the joint angles, which is what the law reads from encoders anyway).
     """
 
     noise_std: float = 0.0
     rate_noise_std: float = 0.0
     quantization: float = 0.0
     rate_quantization: float = 0.0
-    model = "physical"  # the encoders: both models coincide
+    model: str = "physical"
     name = "joint"
 
     def __post_init__(self) -> None:
         validate_real_fields(self, "JointSensor", nonnegative=_NOISE_FIELDS)
+        _check_model(self, "JointSensor")
 
     def resolve(self, arm: Plant) -> tuple[int, float, NDArray[np.float64]]:
         """``(link, distance, mode shapes at the point)``; link -1 means collocated."""
@@ -254,7 +259,7 @@ def parse_sensor(spec: str, model: str = "physical", **noise: float) -> Sensor:
             f"The 'sensor' parameter must be a str. Got {type(spec).__name__} instead."
         )
     if spec == "joint":
-        return JointSensor(**noise)
+        return JointSensor(**noise, model=model)
     if spec == "tip":
         return TipSensor(**noise, model=model)
     m = _POINT.match(spec)

@@ -71,6 +71,7 @@ def simulate(
     rng: np.random.Generator | int | None = None,
     progress: bool | None = None,
     feedforward: bool | None = None,
+    smoothing: float = 0.0,
     check_sampling: bool = True,
 ) -> SimulationResult:
     """Simulate ``arm`` under ``controller`` tracking ``trajectory``.
@@ -125,6 +126,12 @@ def simulate(
         (:class:`flexarm.control.feedforward.RigidDynamics`) to the law's torque
         (two-link arms). Default: what the controller asks for
         (``controller.feedforward``; the observer-based law does).
+    smoothing : float
+        Standard deviation (s) of a zero-phase Gaussian smoothing of the path fed
+        to the law (0: none): the reference is known in advance, so a corner
+        taken at constant speed is cut symmetrically with finite acceleration
+        (:func:`flexarm.sim.references.smoothed_path`). Errors are still measured
+        against the unsmoothed path.
     check_sampling : bool
         Before running, linearise the loop at the start and refuse a control
         period ``dt`` at which it is sampled-data unstable, with the pole and the
@@ -200,6 +207,7 @@ def simulate(
         point=(link, distance) if short_of_tip else None,
         elbow=elbow,
         feedforward=_rigid_dynamics(arm) if use_ff else None,
+        smoothing=check_real(smoothing, "smoothing", _OWNER, nonnegative=True),
         owner=_OWNER,
     )
 
@@ -221,7 +229,7 @@ def simulate(
     # ------------------------------------------------------------ sensor, state
     h = dt / substeps
     sensed, effective_delay = _sensor_arrays(arm, sensor, delay, h, n_steps + 1, generator)
-    params = np.ascontiguousarray(controller.parameters_for(arm, sensor), dtype=float)
+    params = np.ascontiguousarray(controller.design(arm, sensor, dt, refs.reference), dtype=float)
     ny = measurement_size(N, sum(arm.n_modes))
     state = loop_state(
         q=x0[:n],
@@ -284,6 +292,7 @@ def simulate(
         "substeps": substeps,
         "method": method,
         "feedforward": use_ff,
+        "smoothing_s": smoothing,
         "duration_s": n_steps * dt,
         "n_links": N,
         "n_modes": list(arm.n_modes),

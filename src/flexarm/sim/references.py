@@ -4,6 +4,9 @@
 ``r`` a controller reads (layout in :mod:`flexarm.control.signals`):
 
 1. the trajectory gives the desired end-effector path;
+   optionally smoothed by a zero-phase Gaussian filter (``smoothing``, s): the
+   reference is known in advance, so a corner can be cut symmetrically and
+   with finite acceleration instead of overshot (preview);
 2. an input shaper (:mod:`flexarm.control.shapers`) reshapes it;
 3. with a reference delay, it is delayed by the sensor's transport delay (the
    paper's correction of the non-minimum-phase response, "time delays for
@@ -41,7 +44,13 @@ from ..control.trajectories import ELBOWS, Trajectory, check_trajectory, evaluat
 from ..errors import InvalidValueError
 from ..model.kinematics import lever_lengths, rigid_point
 
-__all__ = ["ReferenceSignals", "joint_path", "joint_reference", "reference_signals"]
+__all__ = [
+    "ReferenceSignals",
+    "joint_path",
+    "joint_reference",
+    "reference_signals",
+    "smoothed_path",
+]
 
 F64 = NDArray[np.float64]
 PathFunction = Callable[[F64], tuple[F64, F64, F64]]
@@ -245,6 +254,7 @@ def reference_signals(
     elbow: str = "positive",
     singularity_tol: float = 1e-6,
     feedforward: Feedforward | None = None,
+    smoothing: float = 0.0,
     owner: str = "simulate",
 ) -> ReferenceSignals:
     """The reference ``r`` at the control instants ``t`` (module docstring).
@@ -267,6 +277,9 @@ def reference_signals(
         Inverse-kinematics branch.
     singularity_tol : float
         Passed to :func:`joint_path`.
+    smoothing : float
+        Standard deviation of the zero-phase Gaussian smoothing of the path, s
+        (0: none; :func:`smoothed_path`).
     feedforward : callable, optional
         ``feedforward(theta, dtheta, ddtheta) -> tau`` (arrays (K, n_links); e.g.
         :class:`flexarm.control.feedforward.RigidDynamics`): the torques put in
@@ -276,10 +289,12 @@ def reference_signals(
     """
     n_links = int(arm.n_links)
     path: PathFunction = trajectory.evaluate
+    if smoothing > 0.0:
+        path = smoothed_path(path, smoothing, float(t[1] - t[0]) if t.shape[0] > 1 else 1.0)
     if shaper is not None:
-        path = shaper.apply_function(trajectory.evaluate)
+        path = shaper.apply_function(path)
     pos, vel, acc = (np.asarray(a, dtype=float) for a in path(t - delay))
-    plain = shaper is None and delay == 0.0
+    plain = shaper is None and delay == 0.0 and smoothing == 0.0
     desired = pos if plain else np.asarray(trajectory.evaluate(t)[0], dtype=float)
     r = np.zeros((t.shape[0], reference_size(n_links)))
     rp, rv, ra = r_position(n_links), r_velocity(n_links), r_acceleration(n_links)
@@ -297,7 +312,7 @@ def reference_signals(
             r[:, r_feedforward(n_links) : r_feedforward(n_links) + n_links] = feedforward(
                 theta, dtheta, ddtheta
             )
-        start = desired[:1]
+        start = pos[:1] if smoothing > 0.0 else desired[:1]  # where the law's reference starts
         initial = joint_path(
             arm,
             start,
@@ -321,3 +336,35 @@ def reference_signals(
             f"kinematics (two-link arms). Got a {n_links}-link arm instead."
         )
     return ReferenceSignals(reference=r, desired=desired, initial_angles=initial)
+
+
+def smoothed_path(path: PathFunction, sigma: float, step: float) -> PathFunction:
+    """``path`` filtered by a zero-phase Gaussian of standard deviation ``sigma`` (s).
+
+    Position and velocity are the Gaussian's convolution with the path's own
+    position and velocity; the acceleration is the Gaussian's derivative
+    convolved with the velocity, so a velocity jump (a corner taken at constant
+    speed) becomes a finite, bell-shaped acceleration. The convolution (by FFT,
+    the kernel cut at 5 sigma) runs on a grid of spacing ``step`` (s) around the
+    times asked for, which must be evenly spaced at that step; the path holds
+    its ends beyond its duration.
+    """
+    from scipy.signal import fftconvolve
+
+    half = int(np.ceil(5.0 * sigma / step))
+    u = step * np.arange(-half, half + 1)
+    kernel = np.exp(-0.5 * (u / sigma) ** 2)
+    kernel /= kernel.sum()
+    slope = -u / sigma**2 * kernel  # d/dt of the kernel, 1/s
+
+    def smoothed(tq: F64) -> tuple[F64, F64, F64]:
+        tq = np.atleast_1d(np.asarray(tq, dtype=float))
+        grid = tq[0] + step * np.arange(-half, tq.shape[0] + half)
+        pos, vel, _ = (np.asarray(a, dtype=float) for a in path(grid))
+
+        def conv(signal: F64, k: F64) -> F64:
+            return np.stack([fftconvolve(signal[:, j], k, mode="valid") for j in range(2)], 1)
+
+        return conv(pos, kernel), conv(vel, kernel), conv(vel, slope)
+
+    return smoothed

@@ -27,6 +27,8 @@ import numpy as np
 
 from ..control.adaptive import FuzzyAdaptiveJTPD
 from ..control.controllers import Controller, JacobianTransposePD, JointPD
+from ..control.lqg import LQG
+from ..control.reflected import ReflectedTipPD
 from ..control.shapers import Shaper, design, for_modes
 from ..control.trajectories import Circle, Line, PointToPoint, Square, Waypoints
 from ..model.arm import FlexibleArm
@@ -216,6 +218,9 @@ class Scenario:
             "elbow": s.elbow,
             "max_deflection": s.max_deflection,
             "rng": s.seed,
+            "smoothing": s.smoothing,
+            "feedforward": s.feedforward,
+            "check_sampling": s.check_sampling,
         }
 
 
@@ -353,12 +358,55 @@ def _controller(
         with r.library("controller", params):
             controller = FuzzyAdaptiveJTPD.from_arm(arm, zeta, ks=ks, law=law)
         description.update(zeta=zeta, ks=controller.ks, law=controller.law)
+    elif kind == "reflected":
+        params = {k: v for k, v in t.items() if k != "kind"}
+        r.keys(params, "controller", ("alpha", "zeta"), "kind = 'reflected'")
+        alpha, zeta = params.get("alpha", 0.5), params.get("zeta", 0.707)
+        with r.library("controller", params):
+            controller = ReflectedTipPD.from_arm(arm, alpha=alpha, zeta=zeta)
+        description.update(alpha=controller.alpha, zeta=zeta)
+    elif kind == "lqg":
+        return _lqg(r, t, arm)
     else:
         cls = JacobianTransposePD if kind == "jt-pd" else JointPD
         controller = r.build(cls, t, "controller", kind=True)
-    with r.library("controller", t):
-        controller.parameters(arm)  # the gains are checked against the arm here
+        with r.library("controller", t):
+            controller.parameters(arm)  # the gains are checked against the arm here
     description.update(kp=controller.kp, kd=controller.kd)
+    return controller, description
+
+
+_LQG_KEYS = (
+    "position_weight",
+    "velocity_weight",
+    "torque_weight",
+    "torque_noise",
+    "position_noise",
+    "velocity_noise",
+    "schedule_points",
+    "gain",
+    "ks",
+)
+
+
+def _lqg(r: ScenarioReader, t: Mapping[str, Any], arm: FlexibleArm) -> tuple[LQG, dict[str, Any]]:
+    """kind = "lqg": the LQG's parameters, and ``model_modes`` / ``model_boundary`` for a
+    design model with other modes than the arm (default: the arm itself)."""
+    params = {k: v for k, v in t.items() if k != "kind"}
+    r.keys(params, "controller", (*_LQG_KEYS, "model_modes", "model_boundary"), "kind = 'lqg'")
+    model = None
+    if "model_modes" in params or "model_boundary" in params:
+        modes = params.get("model_modes", arm.n_modes[0])
+        boundary = params.get("model_boundary", arm.boundary)
+        with r.library("controller", {"n_modes": modes, "boundary": boundary}):
+            links = [dataclasses.replace(lk, n_modes=modes) for lk in arm.links]
+            model = dataclasses.replace(arm, links=links, boundary=boundary)
+    with r.library("controller", params):
+        controller = LQG(model=model, **{k: v for k, v in params.items() if k in _LQG_KEYS})
+    description = {"kind": "lqg", **{k: getattr(controller, k) for k in _LQG_KEYS}}
+    description["model"] = (
+        "the arm" if model is None else f"{model.n_modes} modes, {model.boundary}"
+    )
     return controller, description
 
 

@@ -48,6 +48,8 @@ builds, with the same names and SI units::
                               # distance, m from that link's joint)
     # noise_std, rate_noise_std, quantization, rate_quantization
     #   (rad and rad/s for "joint"; m and m/s for "tip" and "point")
+    # model = "physical"      # "tip"/"point": the deflected point, or "paper": the rigid
+    #                         # kinematics of the joint angles at that point (the paper's)
 
     [controller]
     kind = "pd"               # "pd": the paper's gains JacobianTransposePD.from_arm(arm,
@@ -58,7 +60,10 @@ builds, with the same names and SI units::
                               #   scalar or one per link;
                               # "fuzzy": the paper's gains (zeta) adapted by the
                               #   paper's fuzzy system, FuzzyAdaptiveJTPD (keys:
-                              #   zeta = 0.707, ks = 1.0, law = "scaled" | "damping")
+                              #   zeta = 0.707, ks = 1.0, law = "scaled" | "damping");
+                              # "lqg": observer-based LQG from the sensor alone (keys: the
+                              #   LQG parameters, model_modes, model_boundary);
+                              # "reflected": PD on the reflected output (alpha, zeta)
 
     [delay]                   # transport delay of the sensed signal
     delay = 0.0               # s, or "seed" / "dispersive" (below)
@@ -82,6 +87,9 @@ builds, with the same names and SI units::
     # seed = 0                # sensor-noise seed (default: unseeded)
     elbow = "positive"        # inverse-kinematics branch of the reference
     # max_deflection = 4.5    # m (default: each link's length)
+    # smoothing = 0.1         # s: zero-phase smoothing of the reference path (preview)
+    # feedforward = true      # rigid inverse dynamics (default: the controller's choice)
+    # check_sampling = true   # refuse a period beyond the sampled loop's bound
 
 ``delay = "seed"`` or ``"dispersive"`` computes the wave-travel delay
 (:func:`flexarm.sensing.delays.travel_delay`) over the path length along the links
@@ -131,7 +139,7 @@ import numpy as np
 
 from .._validation import check_array, check_int, check_option, check_real
 from ..control.trajectories import ELBOWS
-from ..errors import InvalidValueError
+from ..errors import InvalidTypeError, InvalidValueError
 
 __all__ = [
     "CONTROLLERS",
@@ -153,7 +161,7 @@ __all__ = [
 SECTIONS = ("arm", "trajectory", "sensor", "controller", "delay", "shaper", "simulation")
 TRAJECTORY_KINDS = ("square", "circle", "line", "point-to-point", "waypoints")
 SENSOR_KINDS = ("joint", "tip", "point")
-CONTROLLERS = ("pd", "jt-pd", "joint-pd", "fuzzy")
+CONTROLLERS = ("pd", "jt-pd", "joint-pd", "fuzzy", "lqg", "reflected")
 SHAPERS = ("none", "zv", "zvd", "ei")
 SHAPER_MODES = ("first", "all")
 JOINT_KINDS = ("rigid", "linear", "nonlinear")
@@ -326,6 +334,13 @@ class SimulationSettings:
         Inverse-kinematics branch of the reference.
     max_deflection : float, optional
         Link tip deflection counted as divergence, m (> 0; None: the link's length).
+    smoothing : float
+        Zero-phase Gaussian smoothing of the reference path, s (>= 0; 0: none).
+    feedforward : bool, optional
+        Add the rigid inverse dynamics of the reference (None: what the
+        controller asks for).
+    check_sampling : bool
+        Refuse a control period beyond the sampled loop's stability bound.
     """
 
     duration: float | None = None
@@ -335,6 +350,9 @@ class SimulationSettings:
     seed: int | None = None
     elbow: str = "positive"
     max_deflection: float | None = None
+    smoothing: float = 0.0
+    feedforward: bool | None = None
+    check_sampling: bool = True
 
     def __post_init__(self) -> None:
         owner = "SimulationSettings"
@@ -361,3 +379,11 @@ class SimulationSettings:
                 "max_deflection",
                 check_real(self.max_deflection, "max_deflection", owner, positive=True),
             )
+        set_(self, "smoothing", check_real(self.smoothing, "smoothing", owner, nonnegative=True))
+        for name in ("feedforward", "check_sampling"):
+            value = getattr(self, name)
+            if not isinstance(value, bool) and not (name == "feedforward" and value is None):
+                raise InvalidTypeError(
+                    f"The '{name}' parameter of {owner} must be true or false. "
+                    f"Got {value!r} instead."
+                )

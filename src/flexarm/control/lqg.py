@@ -1,0 +1,348 @@
+"""An observer-based law that tracks with a distant sensor: :class:`LQG`.
+
+Jacobian-transpose PD on a noncollocated point is unstable (the torque-to-tip
+transfer function has a real right-half-plane zero pair); an observer-based
+design is not, because it never inverts the plant. :class:`LQG` is a
+steady-state Kalman filter and a linear-quadratic regulator, both designed from
+the arm linearised at rest (:func:`flexarm.control.linearize.linearize`) and
+discretised at the control period, reading **only the sensor in use** (the
+sensed point's position and velocity, or the joint encoders).
+
+Tracking. The law regulates the deviation from the rigid reference: joint
+angles and rates of the reference, straight links. The simulator adds the
+rigid inverse dynamics of the reference (:mod:`flexarm.control.feedforward`;
+``LQG.feedforward`` is True), and the law adds ``du = -K x`` with ``x`` the
+estimated deviation, the estimator driven by the measured minus the reference
+output of the sensor.
+
+Gain scheduling. A planar arm's dynamics depend on the joint angles only through
+the elbow angle ``theta_2`` (two links), and its Cartesian outputs turn with
+``theta_1``. The design is therefore repeated on a grid of ``theta_2`` spanning
+the reference (``schedule_points``, evenly spaced, with a margin of 0.05 rad) at
+``theta_1 = 0``, and at run time every matrix is interpolated linearly in the
+reference's ``theta_2`` while Cartesian measurements are turned by ``-theta_1``.
+Re-solving on the way would cost a Riccati solution per step; the grid costs a
+few hundred multiply-adds.
+
+Weights (documented defaults, SI units): the regulator penalises the end
+effector's position and velocity deviation (``position_weight``,
+``velocity_weight``; Bryson's rule: the inverse square of an acceptable
+deviation) and the torques (``torque_weight``); the filter assumes a torque
+disturbance ``torque_noise`` (N m, standing for everything the linear model
+leaves out, the feedforward's mismatch included) and measurement noise
+``position_noise`` and ``velocity_noise`` (m, m/s; default: the sensor's own
+noise if it has some, else 1 mm and 1 cm/s; rad and rad/s for encoders).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba as nb
+import numpy as np
+from numba import carray  # type: ignore[attr-defined]
+from numba.core.ccallback import CFunc
+from numpy.typing import NDArray
+
+from .._validation import check_int, check_real
+from ..errors import InvalidTypeError, InvalidValueError
+from ..fuzzy import FuzzySystem, evaluate_into, paper_system, workspace_size
+from ..fuzzy.compiled import pack_system, unpack_system
+from ..model.arm import FlexibleArm
+from ..model.plant import Plant
+from ..sensing.sensors import Sensor, TipSensor
+from .controllers import CONTROL_SIGNATURE, Controller
+from .design import kalman, lqr
+from .linearize import linearize
+from .signals import (
+    r_angles,
+    r_position,
+    r_rates,
+    r_velocity,
+    y_angles,
+    y_point,
+    y_point_rate,
+    y_rates,
+)
+
+__all__ = ["LQG", "lqg_law"]
+
+F64 = NDArray[np.float64]
+_HEAD = 8  # nx, ny, grid size, point sensor flag, gain, ks, lambda0, fuzzy offset
+_OWNER = "LQG"
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _lerp(p: F64, o0: int, o1: int, w: float, k: int) -> float:  # pragma: no cover
+    return float((1.0 - w) * p[o0 + k] + w * p[o1 + k])
+
+
+@nb.njit(cache=True, nogil=True)
+def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # pragma: no cover
+    """The LQG step (module docstring); parameter and state layout in :class:`LQG`."""
+    nu = tau.shape[0]
+    nx, ny, ng = int(p[0]), int(p[1]), int(p[2])
+    point = p[3] != 0.0
+    gain, ks, lam0, fo = p[4], p[5], p[6], int(p[7])
+    grid = p[_HEAD : _HEAD + ng]
+    blk = nx * nx + nx * nu + ny * nx + nu * nx + nx * ny
+    base = _HEAD + ng
+    # --- the schedule: interpolate between the grid points around theta_2
+    ra = r_angles(nu)
+    th1, th2 = r[ra], r[ra + 1]
+    j = 0
+    while j < ng - 2 and th2 > grid[j + 1]:
+        j += 1
+    w = 0.0
+    if ng > 1:
+        w = (th2 - grid[j]) / (grid[j + 1] - grid[j])
+        w = min(max(w, 0.0), 1.0)
+    o0 = base + j * blk
+    o1 = base + min(j + 1, ng - 1) * blk
+    f_phi, f_gam = 0, nx * nx
+    f_c, f_k, f_m = f_gam + nx * nu, f_gam + nx * nu + ny * nx, f_gam + nx * nu + ny * nx + nu * nx
+    xh = s[0:nx]
+    du = s[nx : nx + nu]
+    xp = s[nx + nu : 2 * nx + nu]
+    innov = s[2 * nx + nu : 2 * nx + nu + ny]
+    # --- prediction: xp = Phi xh + Gamma du
+    for a in range(nx):
+        acc = 0.0
+        for b in range(nx):
+            acc += _lerp(p, o0 + f_phi, o1 + f_phi, w, a * nx + b) * xh[b]
+        for b in range(nu):
+            acc += _lerp(p, o0 + f_gam, o1 + f_gam, w, a * nu + b) * du[b]
+        xp[a] = acc
+    # --- the measurement's deviation from the reference (in the design frame)
+    if point:
+        yp, yv, rp, rv = y_point(nu), y_point_rate(nu), r_position(nu), r_velocity(nu)
+        c, sn = np.cos(th1), np.sin(th1)
+        ex, ey = y[yp] - r[rp], y[yp + 1] - r[rp + 1]
+        vx, vy = y[yv] - r[rv], y[yv + 1] - r[rv + 1]
+        innov[0] = c * ex + sn * ey
+        innov[1] = -sn * ex + c * ey
+        innov[2] = c * vx + sn * vy
+        innov[3] = -sn * vx + c * vy
+    else:
+        ya, yr, rr = y_angles(nu), y_rates(nu), r_rates(nu)
+        for i in range(nu):
+            innov[i] = y[ya + i] - r[ra + i]
+            innov[nu + i] = y[yr + i] - r[rr + i]
+    for a in range(ny):
+        acc = 0.0
+        for b in range(nx):
+            acc += _lerp(p, o0 + f_c, o1 + f_c, w, a * nx + b) * xp[b]
+        innov[a] -= acc
+    # --- measurement update and control
+    for a in range(nx):
+        acc = xp[a]
+        for b in range(ny):
+            acc += _lerp(p, o0 + f_m, o1 + f_m, w, a * ny + b) * innov[b]
+        xh[a] = acc
+    if ks > 0.0:  # fuzzy adaptation: the paper's system reads the estimated deflections
+        nd = nx // 2
+        x_in = s[2 * nx + nu + ny : 2 * nx + 2 * nu + ny]
+        for i in range(nu):
+            acc = 0.0
+            for q in range(nd):
+                acc += p[fo + i * nd + q] * xh[q]
+            x_in[i] = ks * acc
+        system = unpack_system(p, fo + nu * nd)
+        gain = gain * evaluate_into(system, x_in, s[2 * nx + 2 * nu + ny + 1 :]) / lam0
+        s[2 * nx + 2 * nu + ny] = gain  # the last gain, for the record
+    for a in range(nu):
+        acc = 0.0
+        for b in range(nx):
+            acc -= _lerp(p, o0 + f_k, o1 + f_k, w, a * nx + b) * xh[b]
+        du[a] = gain * acc
+        tau[a] = gain * acc
+
+
+@nb.cfunc(CONTROL_SIGNATURE, cache=True)
+def lqg_cfunc(t, y, ny, r, nr, p, n_p, s, ns, tau, nt):  # type: ignore[no-untyped-def]
+    lqg_law(  # pragma: no cover - compiled
+        t, carray(y, ny), carray(r, nr), carray(p, n_p), carray(s, ns), carray(tau, nt)
+    )
+
+
+@dataclass(frozen=True)
+class LQG(Controller):
+    """Observer-based LQG from the sensor in use alone (module docstring).
+
+    Parameters
+    ----------
+    model : FlexibleArm, optional
+        The design model (default: the simulated arm). A model with fewer modes
+        than the plant is the usual case on a real arm.
+    position_weight : float
+        Regulator weight on the end effector's position deviation, 1/m**2.
+    velocity_weight : float
+        Regulator weight on its velocity deviation, s**2/m**2.
+    torque_weight : float
+        Regulator weight on the torques, 1/(N m)**2.
+    torque_noise : float
+        Filter: torque disturbance standard deviation per joint, N m.
+    position_noise, velocity_noise : float, optional
+        Filter: measurement noise of the sensed position and velocity (m, m/s;
+        rad, rad/s for encoders). Default: the sensor's noise if it has some,
+        else 1e-2 and 1e-2 (a deliberately distrusted position: a slow filter
+        is what keeps unmodelled modes out of the loop).
+    schedule_points : int
+        Points of the ``theta_2`` grid (>= 1).
+    gain : float
+        A constant scale of the feedback ``du`` (> 0; 1 is the design).
+    ks : float
+        Fuzzy adaptation (0: off). The paper's fuzzy system
+        (:func:`flexarm.fuzzy.paper_system`, or ``fls``) reads ``ks`` times the
+        links' tip deflections estimated by the filter (m) and scales the
+        feedback by ``gain * lambda / lambda(0, 0)`` (1 to 5 for the paper's
+        system), as :class:`~flexarm.control.adaptive.FuzzyAdaptiveJTPD` does for
+        Jacobian-transpose PD. Judge it against constant gains over that range.
+    fls : FuzzySystem, optional
+        One input per link, centroid defuzzifier, positive output at rest.
+
+    Notes
+    -----
+    Parameter vector: ``nx, ny, G, point`` then the grid (``G``) then, per grid
+    point, ``Phi`` (nx, nx), ``Gamma`` (nx, nu), ``C`` (ny, nx), ``K`` (nu, nx),
+    ``M`` (nx, ny) row-major. State: the estimate (nx), the last ``du`` (nu) and
+    scratch (nx + ny).
+    """
+
+    model: FlexibleArm | None = None
+    position_weight: float = 1e4
+    velocity_weight: float = 10.0
+    torque_weight: float = 1.0
+    torque_noise: float = 0.3
+    position_noise: float | None = None
+    velocity_noise: float | None = None
+    schedule_points: int = 9
+    gain: float = 1.0
+    ks: float = 0.0
+    fls: FuzzySystem | None = None
+    name = "lqg"
+    feedforward = True
+
+    def __post_init__(self) -> None:
+        if self.model is not None and not isinstance(self.model, FlexibleArm):
+            raise InvalidTypeError(
+                f"The 'model' parameter of {_OWNER} must be a FlexibleArm. "
+                f"Got {type(self.model).__name__} instead."
+            )
+        for name in ("position_weight", "velocity_weight", "torque_weight", "torque_noise"):
+            object.__setattr__(
+                self, name, check_real(getattr(self, name), name, _OWNER, positive=True)
+            )
+        for name in ("position_noise", "velocity_noise"):
+            if getattr(self, name) is not None:
+                value = check_real(getattr(self, name), name, _OWNER, positive=True)
+                object.__setattr__(self, name, value)
+        object.__setattr__(
+            self,
+            "schedule_points",
+            check_int(self.schedule_points, "schedule_points", _OWNER, minimum=1),
+        )
+        object.__setattr__(self, "gain", check_real(self.gain, "gain", _OWNER, positive=True))
+        object.__setattr__(self, "ks", check_real(self.ks, "ks", _OWNER, nonnegative=True))
+        if self.fls is not None and not isinstance(self.fls, FuzzySystem):
+            raise InvalidTypeError(
+                f"The 'fls' parameter of {_OWNER} must be a flexarm.fuzzy.FuzzySystem. "
+                f"Got {type(self.fls).__name__} instead."
+            )
+
+    @property
+    def cfunc(self) -> CFunc:
+        return lqg_cfunc
+
+    def _model(self, arm: Plant) -> FlexibleArm:
+        model = self.model if self.model is not None else arm
+        if not isinstance(model, FlexibleArm) or model.n_links != 2:
+            raise InvalidValueError(
+                f"The 'model' parameter of {_OWNER} must be a two-link FlexibleArm (the "
+                "schedule runs on the elbow angle). Got "
+                f"{type(model).__name__} with {model.n_links} links instead."
+            )
+        return model
+
+    def parameters(self, arm: Plant) -> F64:
+        raise InvalidValueError(
+            f"{_OWNER} is designed for a control period and a reference: simulate() calls "
+            "design(arm, sensor, dt, reference)."
+        )
+
+    def initial_state(self, arm: Plant) -> F64:
+        model = self._model(arm)
+        nx, nu = 2 * model.n_dof, model.n_links
+        ny = 4  # the largest measurement: a point's position and velocity, or 2 x 2 encoders
+        fuzzy = nu + 1 + int(workspace_size(self._fuzzy().compiled())) if self.ks > 0 else 0
+        state = np.zeros(nx + nu + nx + ny + fuzzy)
+        if self.ks > 0:
+            state[2 * nx + 2 * nu + ny] = self.gain
+        return state
+
+    def _fuzzy(self) -> FuzzySystem:
+        return paper_system() if self.fls is None else self.fls
+
+    def _noise(self, sensor: Sensor) -> tuple[float, float]:
+        pos = self.position_noise if self.position_noise is not None else sensor.noise_std
+        vel = self.velocity_noise if self.velocity_noise is not None else sensor.rate_noise_std
+        return float(pos or 1e-2), float(vel or 1e-2)
+
+    def design(self, arm: Plant, sensor: Sensor | None, dt: float, reference: F64) -> F64:
+        """The parameter vector for ``arm`` read through ``sensor`` at period ``dt`` (s)
+        along ``reference`` (the reference vectors of the run, shape (K, 6 + 4 N))."""
+        model = self._model(arm)
+        sensor = TipSensor() if sensor is None else sensor
+        link, _, _ = sensor.resolve(model)
+        point = link >= 0
+        n_links = model.n_links
+        ra = r_angles(n_links)
+        th2 = reference[:, ra + 1]
+        lo, hi = float(np.min(th2)) - 0.05, float(np.max(th2)) + 0.05
+        grid = (
+            np.linspace(lo, hi, self.schedule_points)
+            if self.schedule_points > 1
+            else np.array([0.5 * (lo + hi)])
+        )
+        pos_noise, vel_noise = self._noise(sensor)
+        nx = 2 * model.n_dof
+        blocks = []
+        ny = 0
+        for th in grid:
+            theta = np.array([0.0, th])
+            meas = linearize(model, theta, sensor=sensor, rates=True).discretize(dt)
+            tip = linearize(model, theta, output="tip", rates=True)
+            ny = meas.n_outputs
+            half = ny // 2
+            q = tip.C.T @ np.diag([self.position_weight] * 2 + [self.velocity_weight] * 2) @ tip.C
+            q += 1e-9 * np.trace(q) / nx * np.eye(nx)
+            reg = lqr(meas, q, self.torque_weight * np.eye(n_links))
+            rn = np.diag([pos_noise**2] * half + [vel_noise**2] * half)
+            est = kalman(meas, meas.B, self.torque_noise**2 * np.eye(n_links), rn)
+            blocks.append(np.concatenate([meas.A.ravel(), meas.B.ravel(), meas.C.ravel(),
+                                          reg.K.ravel(), est.M.ravel()]))  # fmt: skip
+        fuzzy: list[F64] = []
+        lam0 = 1.0
+        if self.ks > 0:
+            fls = self._fuzzy()
+            if len(fls.inputs) != n_links:
+                raise InvalidValueError(
+                    f"The 'fls' parameter of {_OWNER} must have one input per link ({n_links}). "
+                    f"Got {len(fls.inputs)} inputs instead."
+                )
+            lam0 = float(fls(*([0.0] * n_links)))
+            if not (np.isfinite(lam0) and lam0 > 0):
+                raise InvalidValueError(
+                    f"The 'fls' parameter of {_OWNER} must give a positive output at rest. "
+                    f"Got {lam0!r} instead."
+                )
+            # each link's tip deflection from the estimated coordinates, rows (n_links, n_dof)
+            tips = np.zeros((n_links, model.n_dof))
+            ms = model.arrays.mode_start
+            for i in range(n_links):
+                tips[i, ms[i] : ms[i + 1]] = model.arrays.tip_deflection[ms[i] : ms[i + 1]]
+            fuzzy = [tips.ravel(), pack_system(fls.compiled())]
+        point_flag = 1.0 if point else 0.0
+        head = np.array([nx, ny, grid.shape[0], point_flag, self.gain, self.ks, lam0, 0.0])
+        head[7] = head.shape[0] + grid.shape[0] + sum(b.shape[0] for b in blocks)  # fuzzy part
+        return np.concatenate([head, grid, *blocks, *fuzzy])
