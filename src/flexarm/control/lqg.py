@@ -36,7 +36,9 @@ noise if it has some, else 1 mm and 1 cm/s; rad and rad/s for encoders).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -50,7 +52,7 @@ from ..fuzzy import FuzzySystem, evaluate_into, paper_system, workspace_size
 from ..fuzzy.compiled import pack_system, unpack_system
 from ..model.arm import FlexibleArm
 from ..model.plant import Plant
-from ..sensing.sensors import Sensor, TipSensor
+from ..sensing.sensors import JointSensor, PointSensor, Sensor, TipSensor
 from .controllers import CONTROL_SIGNATURE, Controller
 from .design import kalman, lqr
 from .linearize import linearize
@@ -184,9 +186,10 @@ class LQG(Controller):
         Filter: torque disturbance standard deviation per joint, N m.
     position_noise, velocity_noise : float, optional
         Filter: measurement noise of the sensed position and velocity (m, m/s;
-        rad, rad/s for encoders). Default: the sensor's noise if it has some,
-        else 1e-2 and 1e-2 (a deliberately distrusted position: a slow filter
-        is what keeps unmodelled modes out of the loop).
+        rad, rad/s for encoders). Default: the sensor's own noise and 1e-2 added
+        in quadrature (``hypot``): the filter distrusts the measurement by at
+        least 1 cm and 1 cm/s, standing for what the linear model leaves out
+        (a slow filter is what keeps unmodelled modes out of the loop).
     schedule_points : int
         Points of the ``theta_2`` grid (>= 1).
     gain : float
@@ -284,9 +287,13 @@ class LQG(Controller):
         return paper_system() if self.fls is None else self.fls
 
     def _noise(self, sensor: Sensor) -> tuple[float, float]:
-        pos = self.position_noise if self.position_noise is not None else sensor.noise_std
-        vel = self.velocity_noise if self.velocity_noise is not None else sensor.rate_noise_std
-        return float(pos or 1e-2), float(vel or 1e-2)
+        pos = self.position_noise
+        vel = self.velocity_noise
+        if pos is None:
+            pos = float(np.hypot(sensor.noise_std, _MEASUREMENT_FLOOR))
+        if vel is None:
+            vel = float(np.hypot(sensor.rate_noise_std, _MEASUREMENT_FLOOR))
+        return float(pos), float(vel)
 
     def design(self, arm: Plant, sensor: Sensor | None, dt: float, reference: F64) -> F64:
         """The parameter vector for ``arm`` read through ``sensor`` at period ``dt`` (s)
@@ -306,21 +313,10 @@ class LQG(Controller):
         )
         pos_noise, vel_noise = self._noise(sensor)
         nx = 2 * model.n_dof
-        blocks = []
-        ny = 0
-        for th in grid:
-            theta = np.array([0.0, th])
-            meas = linearize(model, theta, sensor=sensor, rates=True).discretize(dt)
-            tip = linearize(model, theta, output="tip", rates=True)
-            ny = meas.n_outputs
-            half = ny // 2
-            q = tip.C.T @ np.diag([self.position_weight] * 2 + [self.velocity_weight] * 2) @ tip.C
-            q += 1e-9 * np.trace(q) / nx * np.eye(nx)
-            reg = lqr(meas, q, self.torque_weight * np.eye(n_links))
-            rn = np.diag([pos_noise**2] * half + [vel_noise**2] * half)
-            est = kalman(meas, meas.B, self.torque_noise**2 * np.eye(n_links), rn)
-            blocks.append(np.concatenate([meas.A.ravel(), meas.B.ravel(), meas.C.ravel(),
-                                          reg.K.ravel(), est.M.ravel()]))  # fmt: skip
+        geometry = _Geometry(*sensor.resolve(model)[:2], sensor.model)
+        weights = (self.position_weight, self.velocity_weight, self.torque_weight)
+        noises = (self.torque_noise, pos_noise, vel_noise)
+        blocks, ny = _design_blocks(model, geometry, float(dt), tuple(grid), weights, noises)
         fuzzy: list[F64] = []
         lam0 = 1.0
         if self.ks > 0:
@@ -346,3 +342,58 @@ class LQG(Controller):
         head = np.array([nx, ny, grid.shape[0], point_flag, self.gain, self.ks, lam0, 0.0])
         head[7] = head.shape[0] + grid.shape[0] + sum(b.shape[0] for b in blocks)  # fuzzy part
         return np.concatenate([head, grid, *blocks, *fuzzy])
+
+
+_MEASUREMENT_FLOOR = 1e-2
+"""The measurement noise the filter assumes on top of the sensor's own (m, m/s; rad,
+rad/s for encoders): what the linear model leaves out of the measurement (the
+unmodelled modes first)."""
+
+
+class _Geometry(NamedTuple):
+    """What a design needs of the sensor: where it is and which model it follows."""
+
+    link: int
+    distance: float
+    model: str
+
+
+def _sensor_of(geometry: _Geometry) -> Sensor:
+    if geometry.link < 0:
+        return JointSensor()
+    return PointSensor(geometry.link, geometry.distance, model=geometry.model)
+
+
+@functools.lru_cache(maxsize=64)
+def _design_blocks(
+    model: FlexibleArm,
+    geometry: _Geometry,
+    dt: float,
+    grid: tuple[float, ...],
+    weights: tuple[float, float, float],
+    noises: tuple[float, float, float],
+) -> tuple[list[F64], int]:
+    """Per grid point ``Phi, Gamma, C, K, M`` flattened, and the measurement's size
+    (cached: runs that share a design solve its Riccati equations once)."""
+    qp, qv, rt = weights
+    tn, pos_noise, vel_noise = noises
+    sensor = _sensor_of(geometry)
+    nx, n_links = 2 * model.n_dof, model.n_links
+    blocks = []
+    ny = 0
+    for th in grid:
+        theta = np.array([0.0, th])
+        meas = linearize(model, theta, sensor=sensor, rates=True).discretize(dt)
+        tip = linearize(model, theta, output="tip", rates=True)
+        ny = meas.n_outputs
+        half = ny // 2
+        q = tip.C.T @ np.diag([qp, qp, qv, qv]) @ tip.C
+        q += 1e-9 * np.trace(q) / nx * np.eye(nx)
+        reg = lqr(meas, q, rt * np.eye(n_links))
+        rn = np.diag([pos_noise**2] * half + [vel_noise**2] * half)
+        est = kalman(meas, meas.B, tn**2 * np.eye(n_links), rn)
+        parts = [meas.A, meas.B, meas.C, reg.K, est.M]
+        blocks.append(np.concatenate([a.ravel() for a in parts]))
+    for b in blocks:
+        b.flags.writeable = False
+    return blocks, ny
