@@ -58,9 +58,18 @@ def test_scenario_errors_name_the_key(data, key):
 
 def test_cli_lqg_on_the_tip_sensor(capsys):
     status, out, err = run(
-        capsys, "simulate", "--controller", "lqg", "--sensor", "tip", "--smoothing", "0.1",
-        "--duration", "6", "--json",
-    )  # fmt: skip
+        capsys,
+        "simulate",
+        "--controller",
+        "lqg",
+        "--sensor",
+        "tip",
+        "--smoothing",
+        "0.1",
+        "--duration",
+        "6",
+        "--json",
+    )
     assert status == 0, err
     data = json.loads(out)
     assert data["settings"]["controller"]["kind"] == "lqg"
@@ -70,9 +79,16 @@ def test_cli_lqg_on_the_tip_sensor(capsys):
 
 def test_cli_paper_sensor_model(capsys):
     status, out, err = run(
-        capsys, "simulate", "--sensor", "point:1:0.5", "--sensor-model", "paper",
-        "--duration", "0.5", "--json",
-    )  # fmt: skip
+        capsys,
+        "simulate",
+        "--sensor",
+        "point:1:0.5",
+        "--sensor-model",
+        "paper",
+        "--duration",
+        "0.5",
+        "--json",
+    )
     assert status == 0, err
     data = json.loads(out)
     assert data["settings"]["sensor"]["model"] == "paper"

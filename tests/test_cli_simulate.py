@@ -271,9 +271,18 @@ def test_seed_and_dispersive_delays_over_the_path_along_the_links(capsys, paper)
     assert data["run"]["effective_delay_s"] == pytest.approx(2e-4)  # one sample (exact)
 
     data = run_json(
-        capsys, *base, "--sensor", "point:1:0.5", "--delay", "dispersive",
-        "--delay-method", "pade", "--pade-order", "3", "--delay-reference",
-    )  # fmt: skip
+        capsys,
+        *base,
+        "--sensor",
+        "point:1:0.5",
+        "--delay",
+        "dispersive",
+        "--delay-method",
+        "pade",
+        "--pade-order",
+        "3",
+        "--delay-reference",
+    )
     d = data["settings"]["delay"]
     c = 2.0 * math.sqrt(w1) * (link0.flexural_rigidity / link0.linear_density) ** 0.25
     expected = (lengths[0] + 0.5) / c

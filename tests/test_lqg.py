@@ -106,8 +106,16 @@ def test_bad_weights(tip_model, q, r, match):
 
 
 def test_a_sensor_blind_to_a_rigid_motion_is_refused(tip_model):
-    rates_only = StateSpace(tip_model.A, tip_model.B, tip_model.C[2:], None, None,
-                            tip_model.state_names, None, ["dx", "dy"])  # fmt: skip
+    rates_only = StateSpace(
+        tip_model.A,
+        tip_model.B,
+        tip_model.C[2:],
+        None,
+        None,
+        tip_model.state_names,
+        None,
+        ["dx", "dy"],
+    )
     with pytest.raises(ValueError, match=r"'sensor'.*unobservable from dx, dy"):
         kalman(rates_only, rates_only.B, np.eye(2), 1e-4 * np.eye(2))
     # a "sensor" at the base joint sees nothing of the arm

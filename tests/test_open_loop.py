@@ -86,8 +86,9 @@ def test_flexible_link_against_solve_ivp_on_the_numpy_model():
 def test_zero_gain_closed_loop_equals_zero_torque_open_loop():
     arm = fa.FlexibleArm.paper()
     x0 = np.array([0.2, 0.4, 0.01, -0.02, 0.0, 0.0, 0.3, 0.0])
-    closed = simulate(arm, JointPD(kp=0.0, kd=0.0), Square(), duration=0.2, dt=1e-3,
-                      initial_state=x0)  # fmt: skip
+    closed = simulate(
+        arm, JointPD(kp=0.0, kd=0.0), Square(), duration=0.2, dt=1e-3, initial_state=x0
+    )
     opened = simulate_open_loop(arm, closed.t, np.zeros((closed.t.size, 2)), initial_state=x0)
     np.testing.assert_array_equal(opened.q, closed.q)
     np.testing.assert_array_equal(opened.dq, closed.dq)
@@ -98,12 +99,16 @@ def test_replaying_a_closed_loop_torque_record_reproduces_the_run(substeps):
     """The closed loop holds its torque over each period: fed back open loop, the
     record gives the same states bit for bit (same integrator, same order)."""
     arm = fa.FlexibleArm.paper(n_modes=2)  # the general kernel
-    closed = simulate(arm, JacobianTransposePD.from_arm(arm), Square(), duration=0.1,
-                      dt=1e-4, substeps=substeps)  # fmt: skip
+    closed = simulate(
+        arm, JacobianTransposePD.from_arm(arm), Square(), duration=0.1, dt=1e-4, substeps=substeps
+    )
     opened = simulate_open_loop(
-        arm, closed.t, closed.tau, initial_state=np.r_[closed.q[0], closed.dq[0]],
+        arm,
+        closed.t,
+        closed.tau,
+        initial_state=np.r_[closed.q[0], closed.dq[0]],
         substeps=substeps,
-    )  # fmt: skip
+    )
     np.testing.assert_array_equal(opened.q, closed.q)
     np.testing.assert_array_equal(opened.tip, closed.tip)
 
@@ -111,8 +116,9 @@ def test_replaying_a_closed_loop_torque_record_reproduces_the_run(substeps):
 def test_paper_structure_replay_is_bitwise_too():
     arm = fa.FlexibleArm.paper()  # the two-links-one-mode scalar kernel
     closed = simulate(arm, duration=0.05, dt=1e-4)
-    opened = simulate_open_loop(arm, closed.t, closed.tau,
-                                initial_state=np.r_[closed.q[0], closed.dq[0]])  # fmt: skip
+    opened = simulate_open_loop(
+        arm, closed.t, closed.tau, initial_state=np.r_[closed.q[0], closed.dq[0]]
+    )
     np.testing.assert_array_equal(opened.q, closed.q)
 
 

@@ -17,9 +17,9 @@ import pytest
 from flexarm.cli import main
 from flexarm.studies.reproduction import OUTPUT_FILES, SENSOR_CASES, RunMatrix, reproduce
 from flexarm.studies.reproduction.cases import Case, CaseResult
-from flexarm.studies.reproduction.verdicts import claims, tracks_well, verdict
+from flexarm.studies.reproduction.verdicts import Part, claims, judge, tracks_well
 
-SHORT = ("--duration", "0.15", "--ks-range", "0,10", "--workers", "2")
+SHORT = ("--duration", "0.15", "--ks-range", "0,10", "--workers", "2", "--no-beyond")
 
 
 def run(capsys, *argv):
@@ -31,23 +31,42 @@ def run(capsys, *argv):
 @pytest.fixture(scope="module")
 def study():
     return reproduce(
-        duration=0.15, ks_range=(0.0, 10.0), laws=("scaled", "damping"), workers=2, progress=False
+        duration=0.15,
+        ks_range=(0.0, 10.0),
+        laws=("scaled", "damping"),
+        workers=2,
+        progress=False,
+        beyond=False,
     )
 
 
-def test_matrix_is_controllers_by_sensors(study):
-    got = [(c.case.controller, c.case.sensor) for c in study.cases]
-    assert got == [(c, s) for c in ("pd", "fuzzy") for s in SENSOR_CASES]
-    assert len(study.delay_study) == 3 * 6
-    assert len(study.ks_study) == 2 * 2 * 3
+def test_matrix_is_models_by_controllers_by_sensors(study):
+    got = [(c.case.sensor_model, c.case.controller, c.case.sensor) for c in study.cases]
+    expected = [
+        (m, c, s) for m in ("paper", "physical") for c in ("pd", "fuzzy") for s in SENSOR_CASES
+    ]
+    assert got == expected
+    assert len(study.delay_study) == 3 * 6  # the paper's model under each delay
+    assert {c.case.sensor_model for c in study.delay_study} == {"paper"}
+    assert len(study.ks_study) == 2 * 2 * 2 * 3  # models, ks, laws, sensors
+
+
+def test_the_paper_model_runs_through_the_seed_delay_with_the_reference_delayed(study):
+    paper = [c for c in study.cases if c.case.sensor_model == "paper" and c.case.sensor != "joint"]
+    for c in paper:
+        assert c.case.delay == "seed" and c.delay_s > 0
+        assert c.result.info["delay_method"] == "pade" and c.result.info["delay_reference"]
+        assert c.result.info["sensor"].endswith("(paper model)")
+    physical = [c for c in study.cases if c.case.sensor_model == "physical"]
+    assert all(c.delay_s == 0.0 for c in physical)
 
 
 def test_neutral_fuzzy_runs_equal_the_nonadaptive_runs(study):
-    pd = {c.case.sensor: c for c in study.cases if c.case.controller == "pd"}
+    pd = {(c.case.sensor, c.case.sensor_model): c for c in study.cases if c.case.controller == "pd"}
     for c in study.ks_study:
         if c.case.ks != 0.0:
             continue
-        ref = pd[c.case.sensor]
+        ref = pd[(c.case.sensor, c.case.sensor_model)]
         assert c.status == ref.status
         np.testing.assert_allclose(c.result.q, ref.result.q, rtol=1e-10, atol=1e-12)
 
@@ -61,25 +80,34 @@ def test_delay_models_give_the_travel_delays(study):
 
 
 def test_shared_runs_are_run_once(study):
-    # 6 matrix runs; the "none" delay study is the matrix; "seed" and "dispersive" add 6
-    # each; the ks study (0 and 10, two laws, three sensors) shares none of them
-    assert study.settings["runs"] == 6 + 2 * 6 + 2 * 2 * 3
+    # the matrix: 6 runs with the paper's model, 4 more with the physical one (the
+    # encoders are the same); the delay study: "seed" is the matrix, "none" and
+    # "dispersive" add the 4 noncollocated runs each; the ks study (ks 0 and 10, two
+    # laws): 4 settings with the encoders (shared by the models) and 4 settings x 2
+    # noncollocated sensors x 2 models
+    assert study.settings["runs"] == (6 + 4) + (4 + 4) + (4 + 16)
 
 
 def test_run_matrix_lists_and_deduplicates():
     runs = RunMatrix.build(
         ks=1.0, law="scaled", ks_range=(0.0, 1.0), laws=("scaled",), delays=("none", "seed")
     )
-    assert (len(runs.matrix), len(runs.delay_study), len(runs.ks_study)) == (6, 12, 6)
-    # new: the 6 seed-delay runs and the 3 fuzzy runs at ks = 0 (ks = 1 scaled is the matrix)
-    assert len(runs.unique()) == 6 + 6 + 3
+    assert (len(runs.matrix), len(runs.delay_study), len(runs.ks_study)) == (12, 12, 12)
+    # the matrix: 6 + 4 (the encoders' runs are shared by the models); the delay
+    # study adds the 4 noncollocated runs without delay ("seed" is the matrix); the ks
+    # study adds ks = 0: 1 with the encoders + 2 noncollocated x 2 models (ks = 1 scaled
+    # is the matrix)
+    assert len(runs.unique()) == 10 + 4 + 5
     assert Case("pd", "tip", ks=0.0, law="damping").key() == Case("pd", "tip").key()
     assert Case("fuzzy", "tip", ks=0.0).key() != Case("fuzzy", "tip").key()
-    assert RunMatrix.build(ks=1.0, law="scaled").unique() == {c.key(): c for c in runs.matrix}
+    assert Case("pd", "joint", sensor_model="physical").key() == Case("pd", "joint", "seed").key()
+    assert Case("pd", "tip", sensor_model="physical").key() != Case("pd", "tip").key()
+    assert set(RunMatrix.build(ks=1.0, law="scaled").unique()) == {c.key() for c in runs.matrix}
 
 
 def test_claims_state_a_verdict_with_numbers(study):
-    assert len(study.claims) == 4
+    assert len(study.claims) == 2 * 4  # per sensor model
+    assert [c["sensor_model"] for c in study.claims] == ["paper"] * 4 + ["physical"] * 4
     for claim in study.claims:
         assert claim["verdict"] in {"supported", "partly supported", "not supported"}
         assert re.search(r"\d", claim["evidence"])
@@ -93,7 +121,7 @@ def test_write_produces_every_artefact_at_once(study, tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     assert {"cases", "claims", "sensitivity", "settings"} <= set(summary)
     rows = list(csv.DictReader((out / "table.csv").open()))
-    assert len(rows) == 6 + 18 + 12
+    assert len(rows) == 12 + 18 + 24  # the matrix (two models), the delay and ks studies
     page = (out / "report.html").read_text()
     assert page.count("data:image/png;base64,") == 4
     assert not re.search(r"src=['\"](?!data:)", page)  # self-contained
@@ -109,9 +137,17 @@ def test_cli_json_summary(capsys, tmp_path):
     )
     assert status == 0, err
     data = json.loads(stdout)
-    assert len(data["cases"]) == 6
+    assert len(data["cases"]) == 12
     for case in data["cases"]:
-        assert {"controller", "sensor", "rms_error_m", "max_error_m"} <= set(case)
+        assert {
+            "controller",
+            "sensor",
+            "sensor_model",
+            "status",
+            "rms_error_m",
+            "max_error_m",
+        } <= set(case)
+        assert (case["rms_error_m"] is None) == (case["status"] == "diverged")
     assert data["claims"] and all("verdict" in c for c in data["claims"])
     assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES)
 
@@ -119,7 +155,7 @@ def test_cli_json_summary(capsys, tmp_path):
 def test_cli_text_summary(capsys, tmp_path):
     status, stdout, err = run(capsys, "reproduce", *SHORT, "--out", tmp_path / "r")
     assert status == 0, err
-    assert "claims:" in stdout and "report.html" in stdout
+    assert "claims (" in stdout and "report.html" in stdout
 
 
 @pytest.mark.parametrize(
@@ -183,7 +219,7 @@ def test_figures_draw_on_new_or_given_figures_with_units(study):
     import matplotlib.pyplot as plt
     from matplotlib.figure import Figure
 
-    for name, panels in (("plot_tracking", 6), ("plot_deflections", 6), ("plot_sensitivity", 3)):
+    for name, panels in (("plot_tracking", 12), ("plot_deflections", 12), ("plot_sensitivity", 3)):
         fig = getattr(study, name)()
         assert isinstance(fig, Figure) and len(fig.axes) == panels
         assert all(ax.get_xlabel() for ax in fig.axes)
@@ -202,7 +238,7 @@ def test_figures_draw_on_new_or_given_figures_with_units(study):
 def test_the_text_summary_lists_the_matrix_and_the_verdicts(study):
     text = study.text()
     assert text.startswith(f"{study.settings['runs']} runs in ")
-    assert len([ln for ln in text.splitlines() if ln.startswith("  nonadaptive ")]) == 3
+    assert len([ln for ln in text.splitlines() if ln.startswith("  nonadaptive ")]) == 6
     for claim in study.claims:
         assert f"{claim['claim']}: {claim['verdict'].upper()}" in text
 
@@ -241,8 +277,10 @@ def test_the_light_constants_match_the_controller():
 
 # ------------------------------------------------- verdicts on hand-made cases
 # The stated rule: a run tracks well when it completes (no divergence) and its RMS
-# error is <= the tolerance; a claim is "supported" when it holds for every run or
-# sensor it is about, "not supported" for none, "partly supported" otherwise.
+# error is <= the tolerance; a claim is made of parts, each holding when it holds for
+# every run it is about; "supported" when every part holds, "not supported" when none
+# does, "partly supported" when some parts hold (only claim 1 has two parts:
+# collocated and noncollocated).
 TOL = 0.2  # m
 DIVERGED = None
 
@@ -265,17 +303,20 @@ def matrix(pd, fuzzy):
 
 
 @pytest.mark.parametrize(
-    ("hits", "total", "expected"),
+    ("holds", "expected"),
     [
-        (3, 3, "supported"),
-        (0, 3, "not supported"),
-        (1, 3, "partly supported"),
-        (2, 3, "partly supported"),
-        (1, 1, "supported"),
+        ((True, True), "supported"),
+        ((False, False), "not supported"),
+        ((True, False), "partly supported"),
+        ((True,), "supported"),
+        ((False,), "not supported"),  # a one-part claim is never partly supported
     ],
 )
-def test_verdict_counts(hits, total, expected):
-    assert verdict(hits, total) == expected
+def test_judging_parts(holds, expected):
+    assert (
+        judge([Part(name=f"part {i}", holds=h, evidence="") for i, h in enumerate(holds)])
+        == expected
+    )
 
 
 def test_tracking_well_needs_completion_and_the_tolerance():
@@ -305,11 +346,11 @@ def test_tracking_well_needs_completion_and_the_tolerance():
             ("supported", "not supported", "not supported"),
         ),
         # pd tracks everywhere; fuzzy: equal at the joint (no gain), better at the tip,
-        # diverged at the elbow (tracks at 2 of 3, better at 1 of 3)
+        # diverged at the elbow: a claim about every sensor fails with one of them
         (
             (0.05, 0.05, 0.05),
             (0.05, 0.01, DIVERGED),
-            ("not supported", "partly supported", "partly supported"),
+            ("not supported", "not supported", "not supported"),
         ),
         # fuzzy completes where pd diverges, but above the tolerance: better, not good
         (
@@ -360,7 +401,7 @@ def test_ks_claim_needs_one_good_setting_per_sensor():
     )
     got = claims(base, study, TOL)
     assert len(got) == 4 and got[3]["claim"].startswith("Some setting of the fuzzy law")
-    assert got[3]["verdict"] == "partly supported"  # 1 of 3 sensors
+    assert got[3]["verdict"] == "not supported"  # good with the joint sensor only
     evidence = got[3]["evidence"]
     assert "joint: RMS 0.1 m at ks = 10 (damping)" in evidence  # the best setting
     assert "end effector: every setting diverged" in evidence
@@ -370,6 +411,37 @@ def test_ks_claim_needs_one_good_setting_per_sensor():
     assert claims(base, good, TOL)[3]["verdict"] == "supported"
     bad = ks_runs([[(1.0, "scaled", 0.21)], [(1.0, "scaled", DIVERGED)], [(1.0, "scaled", 1.0)]])
     assert claims(base, bad, TOL)[3]["verdict"] == "not supported"
+    # every sensor has a good setting, but not the same one: no setting for all
+    apart = ks_runs(
+        [
+            [(1.0, "scaled", 0.1), (10.0, "scaled", 0.5)],
+            [(1.0, "scaled", 0.5), (10.0, "scaled", 0.1)],
+            [(1.0, "scaled", 0.1), (10.0, "scaled", 0.1)],
+        ]
+    )
+    assert claims(base, apart, TOL)[3]["verdict"] == "not supported"
+
+
+def test_claims_are_judged_per_sensor_model():
+    paper = matrix((0.1, 0.1, 0.1), (0.1, 0.1, 0.1))
+    physical = [
+        outcome(c, s, r)
+        for c, rs in (("pd", (0.1, DIVERGED, DIVERGED)), ("fuzzy", (0.1, DIVERGED, DIVERGED)))
+        for s, r in zip(SENSOR_CASES, rs, strict=True)
+    ]
+    for c in physical:
+        object.__setattr__(
+            c, "case", Case(c.case.controller, c.case.sensor, sensor_model="physical")
+        )
+    got = claims(paper + physical, [], TOL)
+    assert [(c["sensor_model"], c["verdict"]) for c in got] == [
+        ("paper", "not supported"),  # nonadaptive tracks well everywhere
+        ("paper", "supported"),
+        ("paper", "not supported"),  # equal errors are no improvement
+        ("physical", "partly supported"),  # poor with the distant sensors, not the joint
+        ("physical", "not supported"),
+        ("physical", "not supported"),
+    ]
 
 
 def test_fuzzy_surface_labels_can_be_given_and_are_checked():

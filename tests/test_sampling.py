@@ -66,8 +66,9 @@ def test_simulate_refuses_the_period_and_says_what_works(rod):
     res = simulate(rod, ctrl, path, dt=0.15, duration=2.0)  # inside the bound: runs
     assert res.info["status"] == "ok"
     with pytest.raises(SimulationError):  # forced: it diverges as predicted
-        simulate(rod, ctrl, path, dt=0.25, duration=200.0, initial_state=[0.1, 0.0],
-                 check_sampling=False)  # fmt: skip
+        simulate(
+            rod, ctrl, path, dt=0.25, duration=200.0, initial_state=[0.1, 0.0], check_sampling=False
+        )
 
 
 def test_three_modes_paper_arm_is_refused_with_its_fastest_pole():

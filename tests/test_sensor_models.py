@@ -30,8 +30,15 @@ def test_paper_model_is_rigid_kinematics_of_the_encoders_delayed_exactly(paper):
     of the joint angles 40 periods earlier."""
     dt, lag = 2e-4, 40
     sensor = PointSensor(1, 0.5, model="paper")
-    res = simulate(paper, COLLOCATED, SQUARE, sensor=sensor, duration=0.3, dt=dt,
-                   delay=DelayModel(lag * dt, "exact"))  # fmt: skip
+    res = simulate(
+        paper,
+        COLLOCATED,
+        SQUARE,
+        sensor=sensor,
+        duration=0.3,
+        dt=dt,
+        delay=DelayModel(lag * dt, "exact"),
+    )
     levers = lever_lengths(paper.link_lengths, 1, 0.5)
     pos, vel = rigid_point(levers, res.q[:, :2], res.dq[:, :2])
     y = res.measurement

@@ -76,9 +76,12 @@ class RigidDynamics:
         c = np.cos(np.asarray(theta2, dtype=float))
         m12 = self.delta + self.beta * c
         return np.stack(
-            [np.stack([self.alpha + 2 * self.beta * c, m12], -1),
-             np.stack([m12, np.full_like(c, self.delta)], -1)], -2,
-        )  # fmt: skip
+            [
+                np.stack([self.alpha + 2 * self.beta * c, m12], -1),
+                np.stack([m12, np.full_like(c, self.delta)], -1),
+            ],
+            -2,
+        )
 
     def __call__(self, theta: ArrayLike, dtheta: ArrayLike, ddtheta: ArrayLike) -> F64:
         """Joint torques ``M(theta_2) ddtheta + h(theta_2, dtheta)``, N m.

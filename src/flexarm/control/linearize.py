@@ -310,9 +310,15 @@ def linearize(
         names = [*names, *(f"d{s}" for s in names)]
     coords = arm.coordinate_names
     return StateSpace(
-        a, b, c, None, None,
-        [*coords, *(f"d{s}" for s in coords)], [f"tau{i + 1}" for i in range(n_links)], names,
-    )  # fmt: skip
+        a,
+        b,
+        c,
+        None,
+        None,
+        [*coords, *(f"d{s}" for s in coords)],
+        [f"tau{i + 1}" for i in range(n_links)],
+        names,
+    )
 
 
 def _output_map(arm: FlexibleArm, sensor: Sensor, output: str, q0: F64) -> tuple[F64, list[str]]:

@@ -313,7 +313,8 @@ class LQG(Controller):
         )
         pos_noise, vel_noise = self._noise(sensor)
         nx = 2 * model.n_dof
-        geometry = _Geometry(*sensor.resolve(model)[:2], sensor.model)
+        link, distance, _ = sensor.resolve(model)
+        geometry = _Geometry(link=link, distance=distance, model=sensor.model)
         weights = (self.position_weight, self.velocity_weight, self.torque_weight)
         noises = (self.torque_noise, pos_noise, vel_noise)
         blocks, ny = _design_blocks(model, geometry, float(dt), tuple(grid), weights, noises)

@@ -232,9 +232,12 @@ class StateSpace:
                     f"({self.n_inputs}, {self.n_outputs}). Got shape {k.shape} instead."
                 )
             ctrl = StateSpace(
-                np.zeros((0, 0)), np.zeros((0, self.n_outputs)), np.zeros((self.n_inputs, 0)),
-                k, self.dt,
-            )  # fmt: skip
+                np.zeros((0, 0)),
+                np.zeros((0, self.n_outputs)),
+                np.zeros((self.n_inputs, 0)),
+                k,
+                self.dt,
+            )
         if ctrl.n_inputs != self.n_outputs or ctrl.n_outputs != self.n_inputs:
             raise InvalidValueError(
                 f"The 'controller' parameter of {_OWNER}.feedback must map the plant's "
@@ -245,8 +248,10 @@ class StateSpace:
         eye_p = np.eye(self.n_outputs)
         solve = np.linalg.solve(eye_p + self.D @ ctrl.D, np.hstack([self.C, -self.D @ ctrl.C]))
         cy = solve  # y = cy @ [x; xc]
-        cu = -(ctrl.C @ np.hstack([np.zeros((ctrl.n_states, self.n_states)), np.eye(ctrl.n_states)])
-               + ctrl.D @ cy)  # fmt: skip
+        cu = -(
+            ctrl.C @ np.hstack([np.zeros((ctrl.n_states, self.n_states)), np.eye(ctrl.n_states)])
+            + ctrl.D @ cy
+        )
         a = np.zeros((self.n_states + ctrl.n_states,) * 2)
         a[: self.n_states, : self.n_states] = self.A
         a[self.n_states :, self.n_states :] = ctrl.A
@@ -269,7 +274,13 @@ class StateSpace:
             ) from exc
         kwargs = {"name": name} if name is not None else {}
         return control.ss(
-            self.A, self.B, self.C, self.D, self.dt if self.dt is not None else 0,
-            states=list(self.state_names), inputs=list(self.input_names),
-            outputs=list(self.output_names), **kwargs,
-        )  # fmt: skip
+            self.A,
+            self.B,
+            self.C,
+            self.D,
+            self.dt if self.dt is not None else 0,
+            states=list(self.state_names),
+            inputs=list(self.input_names),
+            outputs=list(self.output_names),
+            **kwargs,
+        )

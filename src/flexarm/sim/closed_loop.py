@@ -243,8 +243,9 @@ def simulate(
     if check_sampling and isinstance(arm, FlexibleArm):
         from ..control.sampling import check_sampling as check
 
-        verdict = check(arm, controller, sensor, x0[:N], refs.reference[0], params,
-                        state.ctrl_state.copy(), dt)  # fmt: skip
+        verdict = check(
+            arm, controller, sensor, x0[:N], refs.reference[0], params, state.ctrl_state.copy(), dt
+        )
         if verdict.period_too_long:  # (a loop unstable in continuous time diverges anyway)
             raise InvalidValueError(verdict.message(_OWNER))
     out: LoopOutputs = {  # every row up to the last one reached is written

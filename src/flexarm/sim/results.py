@@ -245,8 +245,14 @@ class SimulationResult:
             self.save(tmp / "result.npz")
             (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
             header, table = self.table()
-            np.savetxt(tmp / "timeseries.csv", table, fmt="%.10g", delimiter=",",
-                       header=",".join(header), comments="")  # fmt: skip
+            np.savetxt(
+                tmp / "timeseries.csv",
+                table,
+                fmt="%.10g",
+                delimiter=",",
+                header=",".join(header),
+                comments="",
+            )
             fig = self.plot()
             FigureCanvasAgg(fig)
             fig.savefig(tmp / "tracking.png", dpi=100)

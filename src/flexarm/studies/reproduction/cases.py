@@ -27,8 +27,11 @@ __all__ = [
     "DEFAULT_LAW",
     "DEFAULT_TOLERANCE",
     "DELAY_CASES",
+    "MODEL_LABELS",
+    "PAPER_DELAY",
     "SENSOR_CASES",
     "SENSOR_LABELS",
+    "SENSOR_MODELS",
     "Case",
     "CaseResult",
     "Metrics",
@@ -41,6 +44,13 @@ SENSOR_CASES = ("joint", "tip", "point:1:0.5")
 """Joint encoders, the end effector, and 0.5 m from the elbow along link 2."""
 DELAY_CASES = ("none", "seed", "dispersive")
 """No delay, the seed's wave speed, the dispersive bending-wave speed."""
+SENSOR_MODELS = ("paper", "physical")
+"""How a noncollocated sensor is modelled (:mod:`flexarm.sensing.sensors`): the paper's
+rigid kinematics of the joint angles at the sensor's distance through a transport
+delay (the paper's experiment), or the deflected point itself (a real arm)."""
+PAPER_DELAY = "seed"
+"""The transport delay of the paper's experiment (the seed's wave speed over the
+path to the sensor, a 2nd-order Padé, the reference delayed the same): paper.md §3."""
 ADAPTATION_LAWS = ("scaled", "damping")
 """The fuzzy law's adaptation laws: :data:`flexarm.control.adaptive.ADAPTATION_LAWS`,
 repeated here so that reading them does not compile the controllers (a test
@@ -64,6 +74,7 @@ Row = dict[str, str | float | None]
 """One row of the study's table, units in the column names."""
 
 CONTROLLER_LABELS = {"pd": "nonadaptive PD", "fuzzy": "fuzzy adaptive"}
+MODEL_LABELS = {"paper": "the paper's sensor model", "physical": "the physical sensor model"}
 SENSOR_LABELS = {"joint": "joint", "tip": "end effector", "point:1:0.5": "0.5 m from elbow"}
 
 
@@ -80,6 +91,10 @@ class Case:
         Membership-width gain of the fuzzy law, dimensionless (ignored by "pd").
     law : {"scaled", "damping"}
         Adaptation law of the fuzzy controller (ignored by "pd").
+    sensor_model : {"paper", "physical"}
+        The paper's sensor model (its delays realised as 2nd-order Padé with the
+        reference delayed, as the paper did), or the deflected point (delays
+        exact, the reference not delayed). The encoders are the same in both.
     """
 
     controller: str
@@ -87,12 +102,16 @@ class Case:
     delay: str = "none"
     ks: float = DEFAULT_KS
     law: str = DEFAULT_LAW
+    sensor_model: str = "paper"
 
     def key(self) -> tuple[str | float, ...]:
-        """Identity of the run (the fuzzy settings do not matter for "pd")."""
+        """Identity of the run (the fuzzy settings do not matter for "pd", the sensor
+        model not for the encoders, whose delay path is empty)."""
+        model = "encoders" if self.sensor == "joint" else self.sensor_model
+        delay = "none" if self.sensor == "joint" else self.delay
         if self.controller == "pd":
-            return ("pd", self.sensor, self.delay)
-        return (self.controller, self.sensor, self.delay, self.ks, self.law)
+            return ("pd", self.sensor, model, delay)
+        return (self.controller, self.sensor, model, delay, self.ks, self.law)
 
     def scenario_dict(self, duration: float | None, dt: float) -> dict[str, JSONValue]:
         """The case in the scenario-file schema (:mod:`flexarm.sim.scenario`).
@@ -113,6 +132,7 @@ class Case:
             }
         else:
             sensor = {"kind": self.sensor}
+        sensor["model"] = self.sensor_model
         controller: dict[str, JSONValue] = {"kind": self.controller}
         if self.controller == "fuzzy":
             controller.update(ks=self.ks, law=self.law)
@@ -125,13 +145,18 @@ class Case:
             "simulation": simulation,
         }
         if self.delay != "none":
-            data["delay"] = {"delay": self.delay}
+            delay: dict[str, JSONValue] = {"delay": self.delay}
+            if self.sensor_model == "paper":
+                delay.update(method="pade", order=2, reference=True)
+            data["delay"] = delay
         return data
 
     @property
     def label(self) -> str:
         """A readable name: controller, sensor, and the settings that differ from the matrix."""
         text = f"{CONTROLLER_LABELS[self.controller]}, {SENSOR_LABELS[self.sensor]} sensor"
+        if self.sensor != "joint":
+            text += f" ({self.sensor_model} model)"
         if self.controller == "fuzzy":
             text += f" (ks = {self.ks:g}, {self.law})"
         if self.delay != "none":
@@ -196,6 +221,7 @@ class CaseResult:
             "law": self.case.law if self.case.controller == "fuzzy" else None,
             "ks": self.case.ks if self.case.controller == "fuzzy" else None,
             "sensor": self.case.sensor,
+            "sensor_model": self.case.sensor_model,
             "delay": self.case.delay,
             "delay_s": self.delay_s,
             "status": self.status,

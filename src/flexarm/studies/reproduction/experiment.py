@@ -2,8 +2,12 @@
 
 :class:`RunMatrix` lists the runs: the paper's matrix {nonadaptive PD, fuzzy
 adaptive} x {joint sensor, end-effector sensor, sensor 0.5 m from the elbow}
-(no delay, the default fuzzy settings), and the sensitivity study (the matrix
-under each delay model; the fuzzy law over ``ks`` and the adaptation laws).
+under each sensor model — the paper's (rigid kinematics of the joint angles
+through the seed's transport delay, 2nd-order Padé, reference delayed: the
+paper's experiment) and the physical one (the deflected point, no added delay)
+— with the default fuzzy settings, and the sensitivity study (the paper's
+model under each delay model; the fuzzy law over ``ks`` and the adaptation
+laws under each sensor model).
 Runs that two lists share (and nonadaptive runs that differ only in the fuzzy
 settings, which they ignore) are run once.
 
@@ -27,7 +31,15 @@ from ...control.linearize import closed_loop_poles
 from ...sim.closed_loop import simulate
 from ...sim.results import SimulationError
 from ...sim.scenario import Scenario
-from .cases import CONTROLLER_KINDS, SENSOR_CASES, Case, CaseResult, Metrics
+from .cases import (
+    CONTROLLER_KINDS,
+    PAPER_DELAY,
+    SENSOR_CASES,
+    SENSOR_MODELS,
+    Case,
+    CaseResult,
+    Metrics,
+)
 
 __all__ = ["Progress", "RunMatrix", "progress_printer", "run_case", "square_side"]
 
@@ -35,6 +47,7 @@ Progress = Callable[[int, int, Case], None]
 """Called after each finished run with ``(done, total, case)``."""
 
 _SOURCE = "reproduce"
+_MODEL_DELAY = {"paper": PAPER_DELAY, "physical": "none"}
 
 
 @dataclass(frozen=True)
@@ -44,11 +57,12 @@ class RunMatrix:
     Attributes
     ----------
     matrix : tuple of Case
-        The paper's matrix, controller-major (no delay, the default fuzzy settings).
+        The paper's matrix, model-major then controller-major (the default fuzzy
+        settings).
     delay_study : tuple of Case
-        The matrix under each delay model (delay-major).
+        The paper's model under each delay model (delay-major).
     ks_study : tuple of Case
-        The fuzzy law over ``ks`` and the adaptation laws, no delay (law-major, then ``ks``).
+        The fuzzy law over ``ks`` and the adaptation laws (model-major, law, ``ks``).
     """
 
     matrix: tuple[Case, ...]
@@ -78,12 +92,24 @@ class RunMatrix:
         delays : sequence of {"none", "seed", "dispersive"}
             The delay study: the matrix under each delay model (empty: none).
         """
-        matrix = tuple(Case(c, s, "none", ks, law) for c in CONTROLLER_KINDS for s in SENSOR_CASES)
+        matrix = tuple(
+            Case(c, s, _MODEL_DELAY[m], ks, law, m)
+            for m in SENSOR_MODELS
+            for c in CONTROLLER_KINDS
+            for s in SENSOR_CASES
+        )
         delay_study = tuple(
-            Case(c, s, d, ks, law) for d in delays for c in CONTROLLER_KINDS for s in SENSOR_CASES
+            Case(c, s, d, ks, law, "paper")
+            for d in delays
+            for c in CONTROLLER_KINDS
+            for s in SENSOR_CASES
         )
         ks_study = tuple(
-            Case("fuzzy", s, "none", k, lw) for lw in laws for k in ks_range for s in SENSOR_CASES
+            Case("fuzzy", s, _MODEL_DELAY[m], k, lw, m)
+            for m in SENSOR_MODELS
+            for lw in laws
+            for k in ks_range
+            for s in SENSOR_CASES
         )
         return cls(matrix, delay_study, ks_study)
 

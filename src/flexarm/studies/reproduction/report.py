@@ -22,7 +22,14 @@ from typing import TYPE_CHECKING, TypedDict
 import numpy as np
 
 from ..._io import JSONValue, json_ready, output_directory
-from .cases import CONTROLLER_KINDS, CONTROLLER_LABELS, SENSOR_CASES, SENSOR_LABELS, CaseResult
+from .cases import (
+    CONTROLLER_KINDS,
+    CONTROLLER_LABELS,
+    MODEL_LABELS,
+    SENSOR_CASES,
+    SENSOR_LABELS,
+    CaseResult,
+)
 from .verdicts import Claim
 
 if TYPE_CHECKING:
@@ -30,7 +37,18 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["FIGURE_SIZE", "OUTPUT_FILES", "Reproduction", "Settings"]
+    from .beyond import Beyond
+
+__all__ = ["FIGURE_SIZE", "OUTPUT_FILES", "VOCABULARY", "Reproduction", "Settings"]
+
+VOCABULARY = (
+    "Each claim is judged under each sensor model and is made of parts, each about a set "
+    "of runs; a part holds when it holds for every run it speaks of (a claim about every "
+    "sensor holds only if it holds for each). Supported: every part holds. Not supported: "
+    "no part holds. Partly supported: some parts hold and others do not, which happens only "
+    "for a claim the paper states in parts (collocated and noncollocated sensors)."
+)
+VOCABULARY_SHORT = "supported: every part holds for every run it covers; partly: some parts only"
 
 OUTPUT_FILES = (
     "summary.json",
@@ -49,6 +67,7 @@ _TABLE_COLUMNS = (
     "law",
     "ks",
     "sensor",
+    "sensor_model",
     "delay",
     "delay_s",
     "status",
@@ -73,6 +92,7 @@ class Settings(TypedDict):
     laws: list[str]
     delays: list[str]
     sensitivity: bool
+    beyond: bool
     tolerance: float
     square_side_m: float
     tolerance_m: float
@@ -98,6 +118,8 @@ class Reproduction:
         (:mod:`~flexarm.studies.reproduction.verdicts`).
     settings : Settings
         The study's parameters (units in the keys).
+    beyond : Beyond or None
+        The study beyond the paper (None when not run).
     """
 
     cases: list[CaseResult]
@@ -105,6 +127,7 @@ class Reproduction:
     ks_study: list[CaseResult]
     claims: list[Claim]
     settings: Settings
+    beyond: Beyond | None = None
 
     def summary(self) -> dict[str, JSONValue]:
         """The JSON summary (what ``flexarm reproduce --json`` prints)."""
@@ -117,6 +140,7 @@ class Reproduction:
                     "ks": [c.row() for c in self.ks_study],
                 },
                 "settings": self.settings,
+                "beyond": None if self.beyond is None else self.beyond.summary(),
             }
         )
         return summary
@@ -127,7 +151,8 @@ class Reproduction:
         lines = [
             f"{s['runs']} runs in {s['wall_time_s']:.1f} s "
             f"(control period {s['dt_s']:g} s; 'tracks well' = RMS <= {s['tolerance_m']:g} m)",
-            f"  {'controller':<16}{'sensor':<14}{'status':<22}{'rms (m)':>10}{'max (m)':>10}",
+            f"  {'controller':<16}{'sensor':<14}{'model':<10}{'status':<22}"
+            f"{'rms (m)':>10}{'max (m)':>10}",
         ]
         for c in self.cases:
             row = c.row()
@@ -135,11 +160,17 @@ class Reproduction:
             rms = "" if row["rms_error_m"] is None else f"{row['rms_error_m']:.4g}"
             mx = "" if row["max_error_m"] is None else f"{row['max_error_m']:.4g}"
             name = "nonadaptive" if c.case.controller == "pd" else "fuzzy adaptive"
-            lines.append(f"  {name:<16}{c.case.sensor:<14}{status:<22}{rms:>10}{mx:>10}")
-        lines.append("claims:")
+            model = "-" if c.case.sensor == "joint" else c.case.sensor_model
+            lines.append(f"  {name:<16}{c.case.sensor:<14}{model:<10}{status:<22}{rms:>10}{mx:>10}")
+        lines.append(f"claims ({VOCABULARY_SHORT}):")
         for claim in self.claims:
-            lines.append(f"  - {claim['claim']}: {claim['verdict'].upper()}")
+            lines.append(
+                f"  - [{claim['sensor_model']} sensor model] {claim['claim']}: "
+                f"{claim['verdict'].upper()}"
+            )
             lines.append(f"      {claim['evidence']}")
+        if self.beyond is not None:
+            lines += self.beyond.text_lines()
         return "\n".join(lines)
 
     # ------------------------------------------------------------- artefacts
@@ -192,16 +223,22 @@ class Reproduction:
 
     # ------------------------------------------------------------- figures
     def _panels(self, fig: Figure) -> Iterator[tuple[Axes, CaseResult]]:
-        """One axes per case of the matrix (controllers by rows, sensors by columns),
-        titled with the case's outcome."""
-        grid = fig.add_gridspec(len(CONTROLLER_KINDS), len(SENSOR_CASES))
-        for i, ctrl in enumerate(CONTROLLER_KINDS):
+        """One axes per case of the matrix (sensor models and controllers by rows,
+        sensors by columns), titled with the case's outcome."""
+        models = list(dict.fromkeys(c.case.sensor_model for c in self.cases))
+        rows = [(m, ctrl) for m in models for ctrl in CONTROLLER_KINDS]
+        grid = fig.add_gridspec(len(rows), len(SENSOR_CASES))
+        for i, (model, ctrl) in enumerate(rows):
             for j, sensor in enumerate(SENSOR_CASES):
                 ax = fig.add_subplot(grid[i, j])
                 case = next(
-                    c for c in self.cases if c.case.controller == ctrl and c.case.sensor == sensor
+                    c
+                    for c in self.cases
+                    if c.case.controller == ctrl
+                    and c.case.sensor == sensor
+                    and c.case.sensor_model == model
                 )
-                ax.set_title(_panel_title(case), fontsize=9)
+                ax.set_title(_panel_title(case), fontsize=8)
                 yield ax, case
 
     def plot_tracking(self, fig: Figure | None = None) -> Figure:
@@ -286,18 +323,29 @@ class Reproduction:
         top = 2.0 * max(ok) if ok else 1.0
         ks_values = sorted({c.case.ks for c in self.ks_study})
         pos = {k: i for i, k in enumerate(ks_values)}
+        models = list(dict.fromkeys(c.case.sensor_model for c in self.ks_study))
+        markers = {"paper": "o", "physical": "s"}
         for ax, sensor in zip(axes, SENSOR_CASES, strict=True):
-            for law in self.settings["laws"]:
-                cs = [c for c in self.ks_study if c.case.sensor == sensor and c.case.law == law]
-                cs.sort(key=lambda c: c.case.ks)
-                x = [pos[c.case.ks] for c in cs]
-                y = [c.rms if c.status == "ok" else np.nan for c in cs]
-                (line,) = ax.plot(x, y, "o-", label=f"fuzzy, {law}")
-                xd = [pos[c.case.ks] for c in cs if c.status != "ok"]
-                ax.plot(xd, [top] * len(xd), "x", color=line.get_color(), ms=9)
+            for model in models:
+                for law in self.settings["laws"]:
+                    cs = [
+                        c
+                        for c in self.ks_study
+                        if c.case.sensor == sensor
+                        and c.case.law == law
+                        and c.case.sensor_model == model
+                    ]
+                    cs.sort(key=lambda c: c.case.ks)
+                    x = [pos[c.case.ks] for c in cs]
+                    y = [c.rms if c.status == "ok" else np.nan for c in cs]
+                    (line,) = ax.plot(
+                        x, y, markers.get(model, "o") + "-", mfc="none", label=f"{model}, {law}"
+                    )
+                    xd = [pos[c.case.ks] for c in cs if c.status != "ok"]
+                    ax.plot(xd, [top] * len(xd), "x", color=line.get_color(), ms=9)
             pd = [c for c in self.cases if c.case.controller == "pd" and c.case.sensor == sensor]
             if pd and pd[0].status == "ok":
-                ax.axhline(pd[0].rms, color="k", ls="--", lw=1, label="nonadaptive")
+                ax.axhline(pd[0].rms, color="k", ls="--", lw=1, label="nonadaptive (joint)")
             ax.set_xticks(range(len(ks_values)), [f"{k:g}" for k in ks_values])
             ax.set_xlabel("membership-width gain ks (-)")
             ax.set_yscale("log")
@@ -325,15 +373,21 @@ class Reproduction:
             "img{max-width:100%}</style></head><body>",
             "<h1>Sąsiadek et al. (2014), reproduced with flexarm</h1>",
             f"<p>{html.escape(_settings_text(self.settings))}</p>",
-            "<h2>Claims</h2><ul>",
+            "<h2>Claims</h2>",
+            f"<p>{html.escape(VOCABULARY)}</p>",
         ]
-        for c in self.claims:
-            cls = {"supported": "supported", "not supported": "not"}.get(c["verdict"], "partly")
-            parts.append(
-                f"<li><b>{html.escape(c['claim'])}</b> — <span class='{cls}'>"
-                f"{html.escape(c['verdict'])}</span>. {html.escape(c['evidence'])}</li>"
-            )
-        parts.append("</ul><h2>The paper's matrix</h2>")
+        for model in dict.fromkeys(c["sensor_model"] for c in self.claims):
+            parts.append(f"<h3>With {html.escape(MODEL_LABELS.get(model, model))}</h3><ul>")
+            for c in self.claims:
+                if c["sensor_model"] != model:
+                    continue
+                cls = {"supported": "supported", "not supported": "not"}.get(c["verdict"], "partly")
+                parts.append(
+                    f"<li><b>{html.escape(c['claim'])}</b> — <span class='{cls}'>"
+                    f"{html.escape(c['verdict'])}</span>. {html.escape(c['evidence'])}</li>"
+                )
+            parts.append("</ul>")
+        parts.append("<h2>The paper's matrix</h2>")
         parts.append(_html_table(self.cases))
         parts.append(_img(figures, "tracking.png", "End-effector path against the square."))
         parts.append(_img(figures, "deflections.png", "Tip deflections."))
@@ -343,6 +397,8 @@ class Reproduction:
         parts.append(_html_table(self.ks_study))
         parts.append(_img(figures, "sensitivity.png", "RMS error against ks."))
         parts.append(_img(figures, "fuzzy_surface.png", "The fuzzy surface."))
+        if self.beyond is not None:
+            parts.append(self.beyond.html())
         parts.append("</body></html>\n")
         return "\n".join(parts)
 
@@ -358,6 +414,8 @@ def _figure(fig: Figure | None) -> Figure:
 
 def _panel_title(c: CaseResult) -> str:
     head = f"{CONTROLLER_LABELS[c.case.controller]}, {SENSOR_LABELS[c.case.sensor]}"
+    if c.case.sensor != "joint":
+        head += f" ({c.case.sensor_model})"
     if c.status != "ok":
         return f"{head}\ndiverged at t = {c.diverged_at_s:.3g} s"
     return f"{head}\nRMS {c.metrics['rms_error_m']:.3g} m"

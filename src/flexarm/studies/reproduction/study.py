@@ -8,6 +8,7 @@ from collections.abc import Sequence
 
 from ..._validation import check_int, check_option, check_real
 from ...errors import InvalidValueError
+from .beyond import run_beyond
 from .cases import (
     ADAPTATION_LAWS,
     DEFAULT_DT,
@@ -36,6 +37,7 @@ def reproduce(
     laws: Sequence[str] = ADAPTATION_LAWS,
     delays: Sequence[str] = DELAY_CASES,
     sensitivity: bool = True,
+    beyond: bool = True,
     tolerance: float = DEFAULT_TOLERANCE,
     workers: int | None = None,
     progress: Progress | bool | None = None,
@@ -60,6 +62,10 @@ def reproduce(
         The delay models of the sensitivity study.
     sensitivity : bool
         Run the sensitivity study (else only the matrix).
+    beyond : bool
+        Run the study beyond the paper: flexarm's controllers on the physical
+        distant sensors and their robustness rows
+        (:mod:`~flexarm.studies.reproduction.beyond`).
     tolerance : float
         "Tracks well" means RMS error <= ``tolerance`` x the square's side
         (:mod:`~flexarm.studies.reproduction.verdicts`).
@@ -104,6 +110,7 @@ def reproduce(
     cases, delay_study, ks_study = runs.run(
         duration, dt, workers=workers, progress=progress_printer(progress)
     )
+    extra = run_beyond(duration, dt, workers=workers) if beyond else None
     wall = time.perf_counter() - start
 
     side = square_side()
@@ -116,6 +123,7 @@ def reproduce(
         laws=list(law_values),
         delays=list(delay_values),
         sensitivity=sensitivity,
+        beyond=beyond,
         tolerance=tolerance,
         square_side_m=side,
         tolerance_m=tolerance * side,
@@ -123,4 +131,4 @@ def reproduce(
         wall_time_s=wall,
     )
     verdicts = claims(cases, ks_study, tolerance * side)
-    return Reproduction(cases, delay_study, ks_study, verdicts, settings)
+    return Reproduction(cases, delay_study, ks_study, verdicts, settings, extra)

@@ -2,22 +2,34 @@
 
 The rule is stated, not tuned. A run *tracks well* when it completes without
 diverging and its RMS end-effector error is at most ``tolerance_m``
-(:func:`tracks_well`). A claim about several runs (or sensors) is
-``"supported"`` when it holds for all of them, ``"not supported"`` when it holds
-for none, ``"partly supported"`` otherwise (:func:`verdict`). The claims:
+(:func:`tracks_well`).
+
+Vocabulary. Each claim is judged on each sensor model separately, and is made of
+one or more *parts*, each about a set of runs; a part holds when it holds for
+**every** run it speaks of (a claim about every sensor holds only if it holds
+for each sensor):
+
+``"supported"``
+    every part of the claim holds;
+``"not supported"``
+    no part holds;
+``"partly supported"``
+    some parts hold and others do not — possible only for a claim the paper
+    states in parts (claim 1: collocated *and* noncollocated sensors).
+
+The claims, with their parts:
 
 1. *Nonadaptive control tracks poorly with collocated and noncollocated
-   sensors*: holds for each nonadaptive run of the matrix that does not track
-   well.
-2. *Fuzzy adaptive control tracks well regardless of sensor location*: holds
-   for each fuzzy run of the matrix that tracks well.
-3. *Fuzzy adaptation improves on the nonadaptive law*: holds for each sensor
-   where the fuzzy run's RMS error is strictly lower than the nonadaptive
-   run's (a diverged run counts as an infinite error, so two diverged runs are
-   no improvement); counted over the fuzzy runs.
+   sensors*: (a) every nonadaptive run with the joint sensor does not track
+   well; (b) every nonadaptive run with a noncollocated sensor does not.
+2. *Fuzzy adaptive control tracks well regardless of sensor location*: every
+   fuzzy run of the matrix tracks well.
+3. *Fuzzy adaptation improves on the nonadaptive law*: with every sensor the
+   fuzzy run's RMS error is strictly lower than the nonadaptive run's (a
+   diverged run counts as an infinite error: two diverged runs are no
+   improvement).
 4. (With a ``ks`` study) *Some setting of the fuzzy law tracks well with every
-   sensor*: holds for each sensor where at least one run of the study tracks
-   well.
+   sensor*: one setting (``ks``, adaptation law) tracks well with every sensor.
 
 Every verdict carries its evidence: the numbers of the runs behind it.
 """
@@ -25,11 +37,11 @@ Every verdict carries its evidence: the numbers of the runs behind it.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TypedDict
+from typing import NamedTuple, TypedDict
 
-from .cases import SENSOR_CASES, SENSOR_LABELS, CaseResult
+from .cases import MODEL_LABELS, SENSOR_CASES, SENSOR_LABELS, CaseResult
 
-__all__ = ["VERDICTS", "Claim", "claims", "describe", "tracks_well", "verdict"]
+__all__ = ["VERDICTS", "Claim", "Part", "claims", "describe", "judge", "tracks_well"]
 
 VERDICTS = ("supported", "partly supported", "not supported")
 
@@ -38,7 +50,16 @@ class Claim(TypedDict):
     """One claim of the paper with the model's verdict and the numbers behind it."""
 
     claim: str
+    sensor_model: str
     verdict: str
+    evidence: str
+
+
+class Part(NamedTuple):
+    """One part of a claim: whether it holds, and why."""
+
+    name: str
+    holds: bool
     evidence: str
 
 
@@ -47,11 +68,12 @@ def tracks_well(result: CaseResult, tolerance_m: float) -> bool:
     return result.status == "ok" and result.rms <= tolerance_m
 
 
-def verdict(hits: int, total: int) -> str:
-    """``"supported"`` if ``hits == total``, ``"not supported"`` if none, else partly."""
-    if hits == total:
+def judge(parts: Sequence[Part]) -> str:
+    """The verdict on a claim made of ``parts`` (module docstring)."""
+    held = sum(p.holds for p in parts)
+    if held == len(parts):
         return "supported"
-    return "not supported" if hits == 0 else "partly supported"
+    return "not supported" if held == 0 else "partly supported"
 
 
 def describe(result: CaseResult) -> str:
@@ -63,15 +85,30 @@ def describe(result: CaseResult) -> str:
     return f"{sensor}: RMS {result.rms:.3g} m ({pole})"
 
 
+def _all(name: str, runs: Sequence[CaseResult], test: bool) -> Part:
+    return Part(name=name, holds=bool(runs) and test, evidence="; ".join(describe(c) for c in runs))
+
+
+def _claim(text: str, model: str, parts: Sequence[Part], tail: str) -> Claim:
+    if len(parts) == 1:
+        evidence = parts[0].evidence
+    else:
+        evidence = " | ".join(
+            f"{p.name} ({'holds' if p.holds else 'does not hold'}): {p.evidence}" for p in parts
+        )
+    return Claim(claim=text, sensor_model=model, verdict=judge(parts), evidence=evidence + tail)
+
+
 def claims(
     cases: Sequence[CaseResult], ks_study: Sequence[CaseResult], tolerance_m: float
 ) -> list[Claim]:
-    """The verdict on each claim (module docstring).
+    """The verdict on each claim under each sensor model of ``cases`` (module docstring).
 
     Parameters
     ----------
     cases : sequence of CaseResult
-        The paper's matrix: nonadaptive (``"pd"``) and fuzzy runs, one per sensor.
+        The paper's matrix: nonadaptive (``"pd"``) and fuzzy runs, one per sensor
+        and sensor model.
     ks_study : sequence of CaseResult
         The fuzzy law over ``ks`` and the adaptation laws; empty: no claim 4.
     tolerance_m : float
@@ -80,66 +117,106 @@ def claims(
     Returns
     -------
     list of Claim
-        Three claims, four with a ``ks`` study.
+        Per sensor model (in the order the cases give them): three claims, four
+        with a ``ks`` study.
     """
-    tail = f" (tracks well: completes with RMS <= {tolerance_m:.3g} m)."
+    models = list(dict.fromkeys(c.case.sensor_model for c in cases))
+    out: list[Claim] = []
+    for model in models:
+        mine = [c for c in cases if c.case.sensor_model == model]
+        study = [c for c in ks_study if c.case.sensor_model == model]
+        out += _claims_of_model(model, mine, study, tolerance_m)
+    return out
+
+
+def _claims_of_model(
+    model: str, cases: Sequence[CaseResult], ks_study: Sequence[CaseResult], tol: float
+) -> list[Claim]:
+    tail = f" (tracks well: completes with RMS <= {tol:.3g} m; {MODEL_LABELS[model]})."
     pd = [c for c in cases if c.case.controller == "pd"]
     fz = [c for c in cases if c.case.controller == "fuzzy"]
-    poor = [c for c in pd if not tracks_well(c, tolerance_m)]
+    collocated = [c for c in pd if c.case.sensor == "joint"]
+    distant = [c for c in pd if c.case.sensor != "joint"]
     out = [
-        Claim(
-            claim="Nonadaptive control tracks poorly with collocated and noncollocated sensors",
-            verdict=verdict(len(poor), len(pd)),
-            evidence="; ".join(describe(c) for c in pd) + tail,
+        _claim(
+            "Nonadaptive control tracks poorly with collocated and noncollocated sensors",
+            model,
+            [
+                _all("collocated", collocated, not any(tracks_well(c, tol) for c in collocated)),
+                _all("noncollocated", distant, not any(tracks_well(c, tol) for c in distant)),
+            ],
+            tail,
         ),
-        Claim(
-            claim="Fuzzy adaptive control tracks well regardless of sensor location",
-            verdict=verdict(sum(tracks_well(c, tolerance_m) for c in fz), len(fz)),
-            evidence="; ".join(describe(c) for c in fz) + tail,
+        _claim(
+            "Fuzzy adaptive control tracks well regardless of sensor location",
+            model,
+            [_all("every sensor", fz, all(tracks_well(c, tol) for c in fz))],
+            tail,
         ),
     ]
     pairs = [(a, b) for a in fz for b in pd if a.case.sensor == b.case.sensor]
     better = [a for a, b in pairs if a.rms < b.rms]
     out.append(
-        Claim(
-            claim="Fuzzy adaptation improves on the nonadaptive law",
-            verdict=verdict(len(better), len(fz)),
-            evidence="sensors where the adaptive RMS error is lower: "
-            + (", ".join(SENSOR_LABELS[a.case.sensor] for a in better) or "none")
-            + " (adaptive vs nonadaptive: "
-            + "; ".join(
-                f"{SENSOR_LABELS[a.case.sensor]}: {a.rms:.4g} vs {b.rms:.4g} m" for a, b in pairs
-            )
-            + ", inf = diverged).",
+        _claim(
+            "Fuzzy adaptation improves on the nonadaptive law",
+            model,
+            [
+                Part(
+                    name="every sensor",
+                    holds=bool(pairs) and len(better) == len(pairs),
+                    evidence="sensors where the adaptive RMS error is lower: "
+                    + (", ".join(SENSOR_LABELS[a.case.sensor] for a in better) or "none")
+                    + " (adaptive vs nonadaptive: "
+                    + "; ".join(
+                        f"{SENSOR_LABELS[a.case.sensor]}: {a.rms:.4g} vs {b.rms:.4g} m"
+                        for a, b in pairs
+                    )
+                    + ", inf = diverged)",
+                )
+            ],
+            tail,
         )
     )
     if ks_study:
+        settings = sorted({(c.case.law, c.case.ks) for c in ks_study})
+        good = [
+            s
+            for s in settings
+            if all(
+                any(
+                    tracks_well(c, tol)
+                    for c in ks_study
+                    if (c.case.law, c.case.ks) == s and c.case.sensor == sensor
+                )
+                for sensor in SENSOR_CASES
+            )
+        ]
         best = []
         for sensor in SENSOR_CASES:
             runs = [c for c in ks_study if c.case.sensor == sensor]
+            b = min(runs, key=lambda c: c.rms)
             best.append(
-                (
-                    sensor,
-                    min(runs, key=lambda c: c.rms),
-                    any(tracks_well(c, tolerance_m) for c in runs),
+                f"{SENSOR_LABELS[sensor]}: "
+                + (
+                    f"RMS {b.rms:.3g} m at ks = {b.case.ks:g} ({b.case.law})"
+                    if b.status == "ok"
+                    else "every setting diverged"
                 )
             )
+        settings_text = ", ".join(f"ks = {k:g} ({law})" for law, k in good) or "none"
         out.append(
-            Claim(
-                claim="Some setting of the fuzzy law (any ks, either law) tracks well "
-                "with every sensor",
-                verdict=verdict(sum(ok for _, _, ok in best), len(best)),
-                evidence="best over the ks study: "
-                + "; ".join(
-                    f"{SENSOR_LABELS[s]}: "
-                    + (
-                        f"RMS {b.rms:.3g} m at ks = {b.case.ks:g} ({b.case.law})"
-                        if b.status == "ok"
-                        else "every setting diverged"
+            _claim(
+                "Some setting of the fuzzy law (any ks, either law) tracks well with every sensor",
+                model,
+                [
+                    Part(
+                        name="one setting for every sensor",
+                        holds=bool(good),
+                        evidence=f"settings that track well with every sensor: {settings_text}; "
+                        "best per sensor: " + "; ".join(best),
                     )
-                    for s, b, _ in best
-                )
-                + ".",
+                ],
+                tail,
             )
         )
     return out
