@@ -258,3 +258,28 @@ def test_reflected_needs_a_point_and_alpha_in_range():
         ReflectedTipPD(alpha=1.5)
     with pytest.raises(ValueError, match=r"'sensor'.*point"):
         ReflectedTipPD().parameters_for(ARM, JointSensor())
+
+
+def test_closed_loop_growth_is_negative_on_the_design_model_and_matches_a_held_run():
+    """The linear test of the robustness rows: decaying on the design model itself;
+    on a plant where it says "grows", a run held at that configuration grows too."""
+    from flexarm.control.lqg import closed_loop_growth
+    from flexarm.control.trajectories import Line
+
+    law = LQG(torque_weight=0.1, position_noise=1e-3, velocity_noise=1e-2)
+    sensor = PointSensor(1, 0.5)
+    assert closed_loop_growth(ARM, law, sensor, 2e-4, [1.5, 2.5]) < 0
+    plant = fa.FlexibleArm.paper(n_modes=3, boundary="clamped-mass")
+    design_law = LQG(model=ARM, torque_weight=0.1, position_noise=1e-3, velocity_noise=1e-2)
+    rate = closed_loop_growth(plant, design_law, sensor, 2e-4, [2.5])
+    assert rate > 1.0  # per second
+    theta = np.array([0.0, 2.5])
+    p0 = tuple(plant.forward_kinematics(theta))
+    x0 = np.zeros(2 * plant.n_dof)
+    x0[:2], x0[2] = theta, 1e-5
+    res = simulate(
+        plant, design_law, Line(p0, p0, 3.0), sensor=sensor, duration=3.0, initial_state=x0
+    )
+    d = np.abs(res.link_deflections).max(axis=1)
+    early, late = d[(res.t > 0.5) & (res.t < 1.0)].max(), d[(res.t > 2.5)].max()
+    assert late / early > np.exp(0.5 * rate * 1.5)  # grows at (at least half) that rate

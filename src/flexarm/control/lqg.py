@@ -37,6 +37,7 @@ noise if it has some, else 1 mm and 1 cm/s; rad and rad/s for encoders).
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -67,7 +68,7 @@ from .signals import (
     y_rates,
 )
 
-__all__ = ["LQG", "lqg_law"]
+__all__ = ["LQG", "closed_loop_growth", "lqg_law"]
 
 F64 = NDArray[np.float64]
 _HEAD = 8  # nx, ny, grid size, point sensor flag, gain, ks, lambda0, fuzzy offset
@@ -398,3 +399,49 @@ def _design_blocks(
     for b in blocks:
         b.flags.writeable = False
     return blocks, ny
+
+
+def closed_loop_growth(
+    plant: FlexibleArm,
+    law: LQG,
+    sensor: Sensor,
+    dt: float,
+    theta2: Sequence[float],
+) -> float:
+    """The largest growth rate (1/s) of ``plant`` under ``law`` with ``sensor``, both
+    linearised at rest at each elbow angle of ``theta2`` (rad), the law's design
+    model as it designs it, sampled at ``dt`` (s): ``log|z| / dt`` of the closed
+    loop's largest eigenvalue. Negative: decaying; positive: the linear loop grows.
+
+    The plant may differ from the law's design model (more modes, another
+    boundary): this is the linear test of the robustness rows.
+    """
+    model = law._model(plant)
+    reference = np.zeros((len(theta2), 6 + 4 * model.n_links))
+    reference[:, r_angles(model.n_links) + 1] = theta2
+    params = law.design(model, sensor, dt, reference)
+    nx, ny, ng = int(params[0]), int(params[1]), int(params[2])
+    grid = params[_HEAD : _HEAD + ng]
+    nu = model.n_links
+    blk = nx * nx + nx * nu + ny * nx + nu * nx + nx * ny
+    worst = -np.inf
+    for th in theta2:
+        j = int(np.argmin(np.abs(grid - th)))
+        block = params[_HEAD + ng + j * blk : _HEAD + ng + (j + 1) * blk]
+        sizes = [(nx, nx), (nx, nu), (ny, nx), (nu, nx), (nx, ny)]
+        mats, o = [], 0
+        for a, b in sizes:
+            mats.append(block[o : o + a * b].reshape(a, b))
+            o += a * b
+        phi, gam, c, k, m = mats
+        p = linearize(plant, np.array([0.0, grid[j]]), sensor=sensor, rates=True).discretize(dt)
+        n_p = p.n_states
+        eye = np.eye(nx)
+        loop = np.zeros((n_p + nx, n_p + nx))
+        loop[:n_p, :n_p] = p.A
+        loop[:n_p, n_p:] = -p.B @ k
+        loop[n_p:, :n_p] = m @ p.C @ p.A
+        loop[n_p:, n_p:] = (eye - m @ c) @ (phi - gam @ k) - m @ p.C @ p.B @ k
+        radius = float(np.max(np.abs(np.linalg.eigvals(loop))))
+        worst = max(worst, float(np.log(radius) / dt))
+    return worst

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..._io import JSONValue
 from ...control.controllers import Controller
-from ...control.lqg import LQG
+from ...control.lqg import LQG, closed_loop_growth
 from ...control.reflected import ReflectedTipPD, reflection_limit
 from ...control.trajectories import Square
 from ...model.arm import FlexibleArm
@@ -151,12 +151,18 @@ class Beyond:
         square's corners).
     targets : list of dict
         Each target with the figure reached and whether it is met.
+    growth : dict
+        Per sensor, per row with its own plant: the chosen LQG's linear growth rate
+        (1/s; :func:`flexarm.control.lqg.closed_loop_growth`) over the elbow angles
+        the square visits. Positive: the loop linearised at rest grows there (a run
+        may still stay bounded, passing through those angles briefly).
     """
 
     chosen: dict[str, str]
     rows: list[RowResult]
     alpha_limit: float
     targets: list[dict[str, str | float | bool | None]] = field(default_factory=list)
+    growth: dict[str, dict[str, float]] = field(default_factory=dict)
 
     def of(self, law: str, sensor: str) -> list[RowResult]:
         """The runs of ``law`` with ``sensor``."""
@@ -197,6 +203,7 @@ class Beyond:
             ],
             "targets": [dict(x) for x in self.targets],
             "adaptation": adaptation,
+            "linear_growth_per_s": {s: dict(g) for s, g in self.growth.items()},
         }
 
     def text_lines(self) -> list[str]:
@@ -215,6 +222,9 @@ class Beyond:
             )
         for r in self.of("reflected", "tip"):
             lines.append("  " + _row_text(f"reflected tip (alpha {0.9 * self.alpha_limit:.3g})", r))
+        for sensor, rates in self.growth.items():
+            text = ", ".join(f"{row} {rate:+.3g}" for row, rate in rates.items())
+            lines.append(f"  linear growth rate of the chosen LQG, {sensor} (1/s): {text}")
         met = sum(bool(x["met"]) for x in self.targets)
         lines.append(f"  targets met: {met} of {len(self.targets)}")
         lines += [
@@ -264,6 +274,14 @@ class Beyond:
             + f"<p>Chosen LQG weights by the minimax rule: {_html.escape(str(self.chosen))}; "
             f"reflected-tip limit alpha* = {self.alpha_limit:.3g} (run at 0.9 alpha*).</p>"
             + f"<h3>Targets</h3><ul>{targets}</ul><h3>Adaptation</h3><ul>{''.join(adapt)}</ul>"
+            + "<h3>Linear growth rates (1/s) over the square's elbow angles</h3><ul>"
+            + "".join(
+                f"<li>{_html.escape(s)}: "
+                + ", ".join(f"{_html.escape(row)} {rate:+.3g}" for row, rate in g.items())
+                + "</li>"
+                for s, g in self.growth.items()
+            )
+            + "</ul>"
             + f"<h3>Every run</h3><div style='overflow-x:auto'><table><tr>{head}</tr>{body}"
             "</table></div>"
         )
@@ -354,7 +372,24 @@ def run_beyond(duration: float | None, dt: float, *, workers: int = 1) -> Beyond
         results += list(pool.map(run, extra))
     beyond = Beyond(chosen, results, alpha)
     beyond.targets = _targets(beyond)
+    elbow = [float(x) for x in np.linspace(*_elbow_range(), 9)]
+    for sensor, name in chosen.items():
+        law = LQG(model=design, **LQG_CANDIDATES[name])  # type: ignore[arg-type]
+        beyond.growth[sensor] = {
+            row.name: closed_loop_growth(row.plant(), law, SENSORS[sensor], dt, elbow)
+            for row in ROWS
+            if row.noise == 0 and row.delay_s == 0
+        }
     return beyond
+
+
+def _elbow_range() -> tuple[float, float]:
+    """The elbow angles the default square visits (rad)."""
+    from ...sim.references import joint_reference
+
+    square = Square()
+    theta = joint_reference(FlexibleArm.paper(), square, np.linspace(0, square.duration, 401))[0]
+    return float(theta[:, 1].min()), float(theta[:, 1].max())
 
 
 def _targets(b: Beyond) -> list[dict[str, str | float | bool | None]]:
