@@ -20,7 +20,8 @@ SRC = pathlib.Path(__file__).resolve().parents[1] / "src" / "flexarm"
 # each other.
 LAYERS: list[tuple[str, ...]] = [
     ("_version", "errors"),  # the version; the error types
-    ("_lazy", "_validation", "_io", "_compile"),  # lazy names, checks, atomic output, Numba
+    # lazy names, checks, atomic output, Numba, limits on a request's memory and time
+    ("_lazy", "_validation", "_io", "_compile", "_budget"),
     ("model", "fuzzy", "ident"),  # the plant; fuzzy inference; estimators from data
     ("sensing",),  # what a controller can see: sensors and transport delays
     ("control",),  # references, shapers, control laws, linear analysis
@@ -50,6 +51,7 @@ WITHIN: dict[str, list[str]] = {
     "sensing": ["delays", "sensors"],
     "control": [
         "signals",
+        "path_kernels",
         "trajectories",
         "shapers",
         "statespace",
@@ -68,8 +70,10 @@ WITHIN: dict[str, list[str]] = {
         "integrator",
         "loop",
         "driver",
+        "reference_kernels",
         "references",
         "closed_loop",
+        "batch",
         "open_loop",
         "scenario_schema",
         "scenario",

@@ -45,6 +45,7 @@ _NAMES = {
     "SimulationError": "sim.results",
     "SimulationResult": "sim.results",
     "simulate": "sim.closed_loop",
+    "simulate_many": "sim.batch",
     "simulate_open_loop": "sim.open_loop",
 }
 
@@ -64,6 +65,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run
     )
     from .model.link import Link as Link
     from .model.modes import BeamModes as BeamModes
+    from .sim.batch import simulate_many as simulate_many
     from .sim.closed_loop import simulate as simulate
     from .sim.open_loop import simulate_open_loop as simulate_open_loop
     from .sim.results import SimulationError as SimulationError

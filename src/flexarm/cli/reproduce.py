@@ -159,5 +159,5 @@ def add_parser(sub: Any) -> None:
         help="'tracks well' = RMS error <= TOLERANCE x the square's side "
         f"(default {DEFAULT_TOLERANCE:g})",
     )
-    p.add_argument("--workers", type=int, help="parallel runs (default: CPUs, at most 4)")
+    p.add_argument("--workers", type=int, help="parallel runs (default: every core)")
     p.set_defaults(func=_cmd_reproduce)

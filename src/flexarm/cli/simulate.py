@@ -49,6 +49,7 @@ _OPTION_OF_KEY = {
     "simulation.dt": "--dt",
     "simulation.substeps": "--substeps",
     "simulation.seed": "--seed",
+    "simulation.record_every": "--record-every",
 }
 
 
@@ -100,6 +101,7 @@ def _overrides(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
     put("simulation.dt", args.dt)
     put("simulation.substeps", args.substeps)
     put("simulation.seed", args.seed)
+    put("simulation.record_every", args.record_every)
     return out
 
 
@@ -291,6 +293,13 @@ def add_parser(sub: Any) -> None:
         "is sampled-data unstable at 1 ms)",
     )
     sim.add_argument("--substeps", type=int, metavar="N", help="RK4 steps per period (default 1)")
+    sim.add_argument(
+        "--record-every",
+        type=int,
+        metavar="K",
+        help="record every K-th control instant and the last (default 1: all); a long run "
+        "then fits in bounded memory",
+    )
     sim.add_argument(
         "--smoothing",
         type=float,

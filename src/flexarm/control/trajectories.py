@@ -111,7 +111,33 @@ def _piecewise(t: _F, knot_t: _F, knot_p: _F, quintic: bool) -> _Triple:
 
     ``knot_t`` (k,) strictly increasing, s; ``knot_p`` (k, 2), m. A repeated
     point is a dwell. Outside ``[knot_t[0], knot_t[-1])`` the path is at rest.
+    Long time grids go to the compiled twin
+    (:func:`flexarm.control.path_kernels.piecewise_path`), short ones stay in
+    NumPy (no compilation or cache loading for a few points).
     """
+    if t.shape[0] >= _COMPILED_FROM:
+        from .path_kernels import piecewise_path
+
+        out = np.empty((3, t.shape[0], 2))
+        piecewise_path(
+            np.ascontiguousarray(t),
+            np.ascontiguousarray(knot_t, dtype=np.float64),
+            np.ascontiguousarray(knot_p, dtype=np.float64),
+            quintic,
+            out[0],
+            out[1],
+            out[2],
+        )
+        return out[0], out[1], out[2]
+    return _piecewise_numpy(t, knot_t, knot_p, quintic)
+
+
+_COMPILED_FROM = 4096
+"""Time grids at least this long are evaluated by the compiled kernel."""
+
+
+def _piecewise_numpy(t: _F, knot_t: _F, knot_p: _F, quintic: bool) -> _Triple:
+    """The NumPy evaluation of :func:`_piecewise` (the compiled kernel's reference)."""
     k = knot_t.shape[0]
     i = np.clip(np.searchsorted(knot_t, t, side="right") - 1, 0, k - 2)
     t0 = knot_t[i]

@@ -3,6 +3,7 @@
 * :func:`simulate` — a controller tracking a trajectory through a sensor
   (:mod:`~flexarm.sim.closed_loop`; the reference pipeline in
   :mod:`~flexarm.sim.references`, the compiled loop in :mod:`~flexarm.sim.loop`);
+* :func:`simulate_many` — many runs at once on every core (:mod:`~flexarm.sim.batch`);
 * :func:`simulate_open_loop` — the plant driven by joint torques
   (:mod:`~flexarm.sim.open_loop`);
 * :class:`SimulationResult` — time series, metrics, plots, files (:mod:`~flexarm.sim.results`);
@@ -16,6 +17,7 @@ from typing import TYPE_CHECKING
 from .._lazy import attach
 
 _SUBMODULES = (
+    "batch",
     "driver",
     "integrator",
     "loop",
@@ -32,13 +34,17 @@ _NAMES = {
     "SimulationResult": "results",
     "joint_reference": "references",
     "load_scenario": "scenario",
+    "iter_simulations": "batch",
     "simulate": "closed_loop",
+    "simulate_many": "batch",
     "simulate_open_loop": "open_loop",
 }
 
 __getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
 
 if TYPE_CHECKING:  # what type checkers see; nothing is imported at run time
+    from .batch import iter_simulations as iter_simulations
+    from .batch import simulate_many as simulate_many
     from .closed_loop import simulate as simulate
     from .open_loop import simulate_open_loop as simulate_open_loop
     from .references import joint_reference as joint_reference

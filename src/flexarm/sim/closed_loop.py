@@ -28,6 +28,7 @@ import time
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._budget import check_memory, check_time
 from .._io import JSONValue
 from .._validation import check_array, check_int, check_option, check_real, check_rng
 from ..control.controllers import Controller, JacobianTransposePD
@@ -41,11 +42,11 @@ from ..model.plant import Plant, check_plant
 from ..sensing.delays import DelayModel, discretize, pade_state_space
 from ..sensing.sensors import Sensor, check_sensor
 from .driver import LoopOutputs, run_in_chunks, run_scipy
-from .loop import LoopState, SensorArrays, loop_state, prime_delay_line, run, sensor_arrays
-from .references import PathShaper, reference_signals
+from .loop import SensorArrays, loop_state, prime_delay_line, run, sensor_arrays
+from .references import BLOCK, PathShaper, ReferencePipeline
 from .results import SimulationError, SimulationResult, assemble_result
 
-__all__ = ["SimulationError", "simulate"]
+__all__ = ["SimulationError", "recorded_instants", "simulate"]
 
 F64 = NDArray[np.float64]
 _OWNER = "simulate"
@@ -73,6 +74,7 @@ def simulate(
     feedforward: bool | None = None,
     smoothing: float = 0.0,
     check_sampling: bool = True,
+    record_every: int = 1,
 ) -> SimulationResult:
     """Simulate ``arm`` under ``controller`` tracking ``trajectory``.
 
@@ -137,6 +139,11 @@ def simulate(
         period ``dt`` at which it is sampled-data unstable, with the pole and the
         period that would work (:mod:`flexarm.control.sampling`; undelayed,
         noise-free). False runs it anyway (to watch it diverge).
+    record_every : int
+        Record every ``record_every``-th control instant, and the last one (>= 1;
+        default every instant). The run itself is the same; a long run then fits
+        in bounded memory (the reference is computed block by block as it goes).
+        The metrics are those of the recorded instants.
 
     Returns
     -------
@@ -146,6 +153,12 @@ def simulate(
     ------
     SimulationError
         If the state diverges; the partial result is attached.
+    InvalidValueError
+        For a bad parameter, a path out of the arm's workspace, a control period
+        at which the loop is sampled-data unstable, or a run that would need
+        more memory or time than the limits allow (:mod:`flexarm._budget`:
+        ``FLEXARM_MAX_MEMORY``, ``FLEXARM_MAX_TIME``), which is refused before
+        anything is allocated.
     """
     arm = check_plant(arm, _OWNER)
     controller = JacobianTransposePD.from_arm(arm) if controller is None else controller
@@ -186,6 +199,7 @@ def simulate(
                 f"The '{name}' parameter of {_OWNER} must be a bool. Got {flag!r} instead."
             )
     use_ff = bool(controller.feedforward) if feedforward is None else feedforward
+    every = check_int(record_every, "record_every", _OWNER, minimum=1)
     N, n = arm.n_links, arm.n_dof
     n_steps = round(duration / dt)
     if n_steps < 1:
@@ -193,15 +207,18 @@ def simulate(
             f"The 'duration' parameter of {_OWNER} must cover at least one control period "
             f"({dt} s). Got {duration} instead."
         )
-    t: F64 = np.arange(n_steps + 1, dtype=np.float64) * dt
+    n_rows = n_steps + 1
+    ny = measurement_size(N, sum(arm.n_modes))
+    _check_budget(arm, sensor, delay, dt, substeps, n_steps, every, ny)
 
     # ------------------------------------------------------------ reference
     link, distance, _ = sensor.resolve(arm)
     short_of_tip = link >= 0 and not (link == N - 1 and distance == arm.link_lengths[-1])
-    refs = reference_signals(
+    pipeline = ReferencePipeline(
         arm,
         trajectory,
-        t,
+        dt,
+        n_steps,
         shaper=shaper,
         delay=delay.delay if delay_reference else 0.0,
         point=(link, distance) if short_of_tip else None,
@@ -210,12 +227,18 @@ def simulate(
         smoothing=check_real(smoothing, "smoothing", _OWNER, nonnegative=True),
         owner=_OWNER,
     )
+    whole: tuple[F64, F64] | None = None
+    if n_rows <= _WHOLE_REFERENCE_ROWS or method == "scipy":
+        whole = pipeline.rows(0, n_rows)  # short runs: once, for the design and the loop
+        design_reference = whole[0]
+    else:  # long runs: block by block; a pass first checks the path and samples it
+        design_reference = _sampled_reference(pipeline, n_rows)
 
     # ------------------------------------------------------------ initial state, limits
     if initial_state is None:
         x0 = np.zeros(2 * n)
-        if refs.initial_angles is not None:
-            x0[:N] = refs.initial_angles
+        if pipeline.initial_angles is not None:
+            x0[:N] = pipeline.initial_angles
             if arm.has_flexible_joints:
                 x0[arm.motor_slice] = x0[:N]
     else:
@@ -228,9 +251,8 @@ def simulate(
 
     # ------------------------------------------------------------ sensor, state
     h = dt / substeps
-    sensed, effective_delay = _sensor_arrays(arm, sensor, delay, h, n_steps + 1, generator)
-    params = np.ascontiguousarray(controller.design(arm, sensor, dt, refs.reference), dtype=float)
-    ny = measurement_size(N, sum(arm.n_modes))
+    sensed, levels, effective_delay = _sensor_arrays(arm, sensor, delay, h)
+    params = np.ascontiguousarray(controller.design(arm, sensor, dt, design_reference), dtype=float)
     state = loop_state(
         q=x0[:n],
         dq=x0[n:],
@@ -244,28 +266,52 @@ def simulate(
         from ..control.sampling import check_sampling as check
 
         verdict = check(
-            arm, controller, sensor, x0[:N], refs.reference[0], params, state.ctrl_state.copy(), dt
+            arm,
+            controller,
+            sensor,
+            x0[:N],
+            design_reference[0],
+            params,
+            state.ctrl_state.copy(),
+            dt,
         )
         if verdict.period_too_long:  # (a loop unstable in continuous time diverges anyway)
             raise InvalidValueError(verdict.message(_OWNER))
+    kept = recorded_instants(0, n_rows, n_steps, every)
+    n_out = kept.shape[0]
     out: LoopOutputs = {  # every row up to the last one reached is written
-        "q": np.empty((n_steps + 1, n)),
-        "dq": np.empty((n_steps + 1, n)),
-        "tau": np.empty((n_steps + 1, N)),
-        "measurement": np.empty((n_steps + 1, ny)),
+        "q": np.empty((n_out, n)),
+        "dq": np.empty((n_out, n)),
+        "tau": np.empty((n_out, N)),
+        "measurement": np.empty((n_out, ny)),
     }
+    if whole is not None:
+        out["reference"], out["desired"] = (a if every == 1 else a[kept] for a in whole)
+    else:
+        out["reference"], out["desired"] = np.empty((n_out, pipeline.size)), np.empty((n_out, 2))
 
     # ------------------------------------------------------------ run
     start = time.perf_counter()
     if method == "rk4":
 
         def chunk(k0: int, k1: int) -> tuple[int, int]:
-            return _run(
-                arm,
-                controller,
+            if whole is not None:
+                reference = whole[0][k0:k1]
+            else:
+                reference, desired = pipeline.rows(k0, k1)
+                ks = recorded_instants(k0, k1, n_steps, every)
+                rows = (ks + every - 1) // every
+                out["reference"][rows], out["desired"][rows] = reference[ks - k0], desired[ks - k0]
+            noise = sensed.noise
+            if np.any(levels > 0):  # drawn block by block, in order: the same stream at once
+                noise = generator.normal(size=(k1 - k0, levels.shape[0])) * levels
+            first = (k0 + every - 1) // every
+            status, k = run(
+                arm.arrays,
+                controller.cfunc,
                 params,
-                sensed,
-                refs.reference,
+                sensed._replace(noise=noise),
+                reference,
                 dt,
                 substeps,
                 limit,
@@ -273,13 +319,28 @@ def simulate(
                 state,
                 k0,
                 k1,
-                out,
+                n_steps,
+                every,
+                out["q"][first:],
+                out["dq"][first:],
+                out["tau"][first:],
+                out["measurement"][first:],
             )
+            return int(status), int(k)
 
-        status, k_end = run_in_chunks(chunk, n_steps + 1, (n_steps + 1) * substeps * n, progress)
+        status, k_end = run_in_chunks(
+            chunk, n_rows, n_rows * substeps * n, progress, block=None if whole else BLOCK
+        )
     else:
+        assert whole is not None
+        if every != 1 or np.any(levels > 0):
+            raise InvalidValueError(
+                f"The 'method' parameter of {_OWNER}='scipy' supports noise-free sensing "
+                "recorded at every control instant only (it is the integrator's accuracy "
+                "reference)."
+            )
         status, k_end = run_scipy(
-            arm, controller.cfunc, params, sensed, refs.reference, dt, limit, max_defl, state, out
+            arm, controller.cfunc, params, sensed, whole[0], dt, limit, max_defl, state, out
         )
     info: dict[str, JSONValue] = {
         "controller": controller.name,
@@ -291,6 +352,7 @@ def simulate(
         "shaper": None if shaper is None else type(shaper).__name__,
         "dt_s": dt,
         "substeps": substeps,
+        "record_every": every,
         "method": method,
         "feedforward": use_ff,
         "smoothing_s": smoothing,
@@ -303,55 +365,89 @@ def simulate(
         "wall_time_s": time.perf_counter() - start,
         "controller_state": state.ctrl_state.tolist(),
     }
+    # the last row written: the instant the run reached, or the last one recorded before
+    last_row = (k_end + every - 1) // every if status == 0 else k_end // every
     return assemble_result(
         arm,
-        t=t,
+        t=kept.astype(np.float64) * dt,
         q=out["q"],
         dq=out["dq"],
         tau=out["tau"],
         measurement=out["measurement"],
-        reference=refs.reference,
-        desired=refs.desired,
+        reference=out["reference"],
+        desired=out["desired"],
         diverged=status != 0,
-        last_row=k_end,
+        last_row=min(last_row, n_out - 1),
         info=info,
     )
 
 
-def _run(
+_WHOLE_REFERENCE_ROWS = 4 * BLOCK
+"""Runs with at most this many control instants compute their reference at once."""
+
+
+def recorded_instants(k0: int, k1: int, n_steps: int, every: int) -> NDArray[np.int64]:
+    """The instants ``k0 <= k < k1`` that a run of ``n_steps`` periods records with
+    ``record_every = every``: the multiples of ``every``, and the last instant."""
+    first = -(-k0 // every) * every
+    kept = np.arange(first, k1, every, dtype=np.int64)
+    if k0 <= n_steps < k1 and n_steps % every:
+        kept = np.append(kept, np.int64(n_steps))
+    return kept
+
+
+def _sampled_reference(pipeline: ReferencePipeline, n_rows: int) -> F64:
+    """The reference at evenly strided instants (at most :data:`_WHOLE_REFERENCE_ROWS`),
+    from a pass over the whole path (which also checks it before the run starts)."""
+    stride = -(-n_rows // _WHOLE_REFERENCE_ROWS)
+    parts = []
+    for k0 in range(0, n_rows, BLOCK):
+        reference, _ = pipeline.rows(k0, min(k0 + BLOCK, n_rows))
+        first = -(-k0 // stride) * stride
+        parts.append(reference[first - k0 :: stride].copy())  # not a view: frees the block
+    return np.concatenate(parts)
+
+
+def _check_budget(
     arm: Plant,
-    controller: Controller,
-    params: F64,
-    sensed: SensorArrays,
-    reference: F64,
+    sensor: Sensor,
+    delay: DelayModel,
     dt: float,
     substeps: int,
-    limit: F64,
-    max_defl: F64,
-    state: LoopState,
-    k0: int,
-    k1: int,
-    out: LoopOutputs,
-) -> tuple[int, int]:
-    status, k = run(
-        arm.arrays,
-        controller.cfunc,
-        params,
-        sensed,
-        reference,
-        dt,
-        substeps,
-        limit,
-        max_defl,
-        state,
-        k0,
-        k1,
-        out["q"],
-        out["dq"],
-        out["tau"],
-        out["measurement"],
+    n_steps: int,
+    every: int,
+    n_y: int,
+) -> None:
+    """Refuse a run that would need more memory or time than the limits allow."""
+    N, n = arm.n_links, arm.n_dof
+    n_out = n_steps // every + 2
+    # per recorded row: t, q, dq, tau, measurement, reference, desired, tip, and the
+    # assembly's temporaries (about as much again)
+    per_row = 8 * 2 * (1 + 2 * n + N + n_y + (6 + 4 * N) + 2 + 2)
+    link = sensor.resolve(arm)[0]
+    n_ch = 2 * N if link < 0 else 4
+    h = dt / substeps
+    ring = 0.0
+    if delay.delay > 0 and delay.method == "exact":
+        ring = 8.0 * n_ch * (delay.delay / h + 1)
+    blocks = 8.0 * min(n_steps + 1, _WHOLE_REFERENCE_ROWS) * (6 + 4 * N + 2 + n_ch)
+    need = per_row * float(n_out) + ring + blocks
+    check_memory(
+        need,
+        f"a run of {n_steps + 1:.4g} control instants recording {n_out:.4g} rows"
+        + (f" with a delay line of {delay.delay / h:.4g} substeps" if ring else ""),
+        _OWNER,
+        "Record fewer instants (record_every), shorten the duration, lengthen dt"
+        + (" or shorten the delay" if ring else ""),
     )
-    return int(status), int(k)
+    # about four dynamics calls per RK4 substep; a call grows with n_dof squared
+    step = 4.0 * (60e-9 + 12e-9 * n * n) + 150e-9
+    check_time(
+        step * float(n_steps) * substeps,
+        f"a run of {float(n_steps) * substeps:.4g} RK4 steps",
+        _OWNER,
+        "Shorten the duration, lengthen dt or use fewer substeps",
+    )
 
 
 def _torque_limit(torque_limit: float | ArrayLike | None, n_links: int) -> F64:
@@ -370,19 +466,17 @@ def _torque_limit(torque_limit: float | ArrayLike | None, n_links: int) -> F64:
 
 
 def _sensor_arrays(
-    arm: Plant, sensor: Sensor, delay: DelayModel, h: float, n_rows: int, rng: np.random.Generator
-) -> tuple[SensorArrays, float]:
-    """The sensor, its delay (at substep resolution ``h``) and its noise as plain
-    arrays, and the delay actually realised (s)."""
+    arm: Plant, sensor: Sensor, delay: DelayModel, h: float
+) -> tuple[SensorArrays, F64, float]:
+    """The sensor and its delay (at substep resolution ``h``) as plain arrays (no
+    noise rows yet), the noise levels of its channels, and the delay actually
+    realised (s)."""
     link, distance, phi = sensor.resolve(arm)
     n_links = arm.n_links
     n_ch = 2 * n_links if link < 0 else 4
     half = n_ch // 2
     levels = np.r_[np.full(half, sensor.noise_std), np.full(half, sensor.rate_noise_std)]
     resolution = np.r_[np.full(half, sensor.quantization), np.full(half, sensor.rate_quantization)]
-    noise = np.zeros((0, n_ch))  # no noise: no draws (the rng is left untouched)
-    if np.any(levels > 0):
-        noise = rng.normal(size=(n_rows, n_ch)) * levels
     delay_steps, pade, effective = 0, None, 0.0
     if delay.delay > 0:
         if delay.method == "exact":
@@ -402,10 +496,10 @@ def _sensor_arrays(
         levers=lever_lengths(lengths, link, distance) if rigid else lengths,
         delay_steps=delay_steps,
         pade=pade,
-        noise=noise,
+        noise=np.zeros((0, n_ch)),  # drawn block by block as the run goes
         resolution=resolution,
     )
-    return arrays, effective
+    return arrays, levels, effective
 
 
 def _rigid_dynamics(arm: Plant) -> RigidDynamics:

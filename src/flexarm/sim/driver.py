@@ -30,7 +30,9 @@ Chunk = Callable[[int, int], tuple[int, int]]
 """``chunk(k0, k1) -> (status, k)``: advance a compiled loop over ``k0 <= k < k1``."""
 
 
-def run_in_chunks(chunk: Chunk, n_rows: int, work: float, progress: bool | None) -> tuple[int, int]:
+def run_in_chunks(
+    chunk: Chunk, n_rows: int, work: float, progress: bool | None, *, block: int | None = None
+) -> tuple[int, int]:
     """Run ``chunk`` over ``0 <= k < n_rows``; return ``(status, last row written)``.
 
     Parameters
@@ -45,10 +47,17 @@ def run_in_chunks(chunk: Chunk, n_rows: int, work: float, progress: bool | None)
     progress : bool or None
         Show a progress bar on stderr; default: when stderr is a terminal and the
         run is long (``work > 5e6``).
+    block : int, optional
+        Run in chunks of ``block`` rows starting at its multiples (the progress
+        bar then moves once a chunk). Default: one chunk, or fifty with a
+        progress bar.
     """
     show = sys.stderr.isatty() and work > 5e6 if progress is None else bool(progress)
-    n_chunks = 50 if show else 1
-    bounds = np.linspace(0, n_rows, n_chunks + 1).astype(int)
+    if block is not None:
+        bounds = np.r_[np.arange(0, n_rows, block), n_rows]
+    else:
+        bounds = np.linspace(0, n_rows, (50 if show else 1) + 1).astype(int)
+    n_chunks = bounds.shape[0] - 1
     status, k = OK, 0
     for c in range(n_chunks):
         k0, k1 = int(bounds[c]), int(bounds[c + 1])
@@ -112,7 +121,7 @@ def run_scipy(
             control,
             params,
             sensor,
-            reference[: k + 2] if not last else reference[: k + 1],
+            reference[k : k + 1],
             dt,
             1,
             limit,
@@ -120,10 +129,12 @@ def run_scipy(
             st,
             k,
             k + 1,
-            out["q"],
-            out["dq"],
-            out["tau"],
-            out["measurement"],
+            n_rows - 1,
+            1,
+            out["q"][k:],
+            out["dq"][k:],
+            out["tau"][k:],
+            out["measurement"][k:],
         )
         if last:
             return OK, k

@@ -274,23 +274,31 @@ def run(
     state: LoopState,
     k0: int,
     k1: int,
+    n_steps: int,
+    every: int,
     out_q: F64,
     out_dq: F64,
     out_tau: F64,
     out_y: F64,
 ) -> tuple[int, int]:  # pragma: no cover - compiled
-    """Advance the loop over control instants ``k0 <= k < k1`` (record at each ``k``,
-    then act and integrate to ``k + 1`` unless ``k`` is the last row of ``reference``).
+    """Advance the loop over control instants ``k0 <= k < k1`` of a run of
+    ``n_steps`` periods (measure at each ``k``, then act and integrate to ``k + 1``
+    unless ``k == n_steps``).
 
-    Returns ``(status, k)``: status 0 and ``k1`` when done, 1 and the last recorded
-    instant when the state diverged (non-finite, rates above 1e12, or a link's tip
-    deflection above ``max_deflection``).
+    ``reference`` and ``sensor.noise`` (if any) hold the rows of instants
+    ``k0 <= k < k1``: row ``k - k0``. The outputs record every ``every``-th instant
+    and the last one (``k % every == 0`` or ``k == n_steps``): instant ``k`` goes to
+    row ``ceil(k / every) - ceil(k0 / every)``.
+
+    Returns ``(status, k)``: status 0 and ``k1`` when done, 1 and the last instant
+    whose state was finite when the state diverged (non-finite, rates above 1e12,
+    or a link's tip deflection above ``max_deflection``).
     """
     n = state.q.shape[0]
     n_links = model.link.shape[0]
     ms = model.mode_start
     n_modes = ms[n_links] - n_links
-    n_steps = reference.shape[0] - 1
+    row0 = (k0 + every - 1) // every
     h = dt / substeps
     ws = state.ws
     q, dq, tau = state.q, state.dq, state.tau
@@ -331,7 +339,7 @@ def run(
         for c in range(n_ch):
             v = delayed[c]
             if has_noise:
-                v += sensor.noise[k, c]
+                v += sensor.noise[k - k0, c]
             res = sensor.resolution[c]
             if res > 0.0:
                 v = np.round(v / res) * res
@@ -368,17 +376,20 @@ def run(
         for j in range(n_modes):
             y[o_modes + j] = q[n_links + j]
         # ---- record
-        for r in range(n):
-            out_q[k, r] = q[r]
-            out_dq[k, r] = dq[r]
-        for c in range(y.shape[0]):
-            out_y[k, c] = y[c]
+        record = k % every == 0 or k == n_steps
+        row = (k + every - 1) // every - row0
+        if record:
+            for r in range(n):
+                out_q[row, r] = q[r]
+                out_dq[row, r] = dq[r]
+            for c in range(y.shape[0]):
+                out_y[row, c] = y[c]
         if k == n_steps:
             for i in range(n_links):
-                out_tau[k, i] = tau[i]
+                out_tau[row, i] = tau[i]
             return OK, k1
         # ---- act: control law, saturation, zero-order hold
-        rk = reference[k]
+        rk = reference[k - k0]
         control(
             k * dt,
             y.ctypes,
@@ -399,7 +410,8 @@ def run(
                 tau[i] = lim
             elif tau[i] < -lim:
                 tau[i] = -lim
-            out_tau[k, i] = tau[i]
+            if record:
+                out_tau[row, i] = tau[i]
         # ---- integrate to t_{k+1}
         for _ in range(substeps):
             if order > 0:  # Padé filter: x <- Ad x + Bd u over this substep

@@ -45,6 +45,8 @@ from ..errors import InvalidValueError
 from ..model.kinematics import lever_lengths, rigid_point
 
 __all__ = [
+    "BLOCK",
+    "ReferencePipeline",
     "ReferenceSignals",
     "joint_path",
     "joint_reference",
@@ -243,6 +245,223 @@ def joint_reference(
     return theta, dtheta, ddtheta
 
 
+BLOCK = 1 << 15
+"""Control instants per block of the reference (blocks start at multiples of it)."""
+
+
+class ReferencePipeline:
+    """The reference ``r`` and the desired path at any control instants of a run.
+
+    The run has instants ``t_k = k dt``, ``0 <= k <= n_steps``. The pipeline
+    computes them block by block (:data:`BLOCK` instants, aligned): a block's
+    values do not depend on which rows were asked for, so a long run can take
+    its reference one block at a time in bounded memory and still get exactly
+    the numbers a short request would.
+
+    Parameters
+    ----------
+    arm : FlexibleArm or alike
+    trajectory : Trajectory
+        The desired end-effector path.
+    dt : float
+        Control period, s.
+    n_steps : int
+        Periods in the run (instants ``0 .. n_steps``).
+    shaper : Shaper, optional
+        Input shaper applied to the path.
+    delay : float
+        Delay of the reference fed to the law, s (0: none).
+    point : (link, distance), optional
+        A sensed point short of the end effector (two-link arms): the
+        operational-space command becomes that point's path.
+    elbow : {"positive", "negative"}
+        Inverse-kinematics branch.
+    singularity_tol : float
+        Smallest allowed ``|det J| / (L_1 L_2)`` (:func:`joint_path`).
+    feedforward : callable, optional
+        ``feedforward(theta, dtheta, ddtheta) -> tau`` (arrays (K, n_links); e.g.
+        :class:`flexarm.control.feedforward.RigidDynamics`): the torques put in
+        the reference's feedforward columns (zero without it).
+    smoothing : float
+        Standard deviation of the zero-phase Gaussian smoothing of the path, s
+        (0: none; :func:`smoothed_path`).
+    owner : str
+        Named in error messages.
+
+    Attributes
+    ----------
+    size : int
+        Columns of ``r`` (:func:`flexarm.control.signals.reference_size`).
+    initial_angles : ndarray, shape (n_links,) or None
+        Joint angles that put the rigid arm on the law's first reference point
+        (two-link arms), rad.
+
+    Raises
+    ------
+    InvalidValueError
+        From :meth:`rows`, if the path leaves the workspace or passes too close to
+        a singularity in the rows computed (with the time and the point).
+    """
+
+    def __init__(
+        self,
+        arm: KinematicArm,
+        trajectory: Trajectory,
+        dt: float,
+        n_steps: int,
+        *,
+        shaper: PathShaper | None = None,
+        delay: float = 0.0,
+        point: tuple[int, float] | None = None,
+        elbow: str = "positive",
+        singularity_tol: float = 1e-6,
+        feedforward: Feedforward | None = None,
+        smoothing: float = 0.0,
+        owner: str = "simulate",
+    ) -> None:
+        self._n_links = n_links = int(arm.n_links)
+        if n_links != 2 and (point is not None or feedforward is not None):
+            what = "sensor" if point is not None else "feedforward"
+            raise InvalidValueError(
+                f"The '{what}' parameter of {owner} needs joint references, which need "
+                f"inverse kinematics (two-link arms). Got a {n_links}-link arm instead."
+            )
+        self._lengths = np.asarray(arm.link_lengths, dtype=float)
+        self._trajectory = trajectory
+        self._dt, self._n_rows = float(dt), int(n_steps) + 1
+        path: PathFunction = trajectory.evaluate
+        if smoothing > 0.0:
+            path = smoothed_path(path, smoothing, self._dt)
+        if shaper is not None:
+            path = shaper.apply_function(path)
+        self._path, self._delay = path, float(delay)
+        self._plain = shaper is None and delay == 0.0 and smoothing == 0.0
+        self._smoothed = smoothing > 0.0
+        self._levers = None if point is None else lever_lengths(self._lengths, *point)
+        self._sign = 1.0 if elbow == "positive" else -1.0
+        self._tol = float(singularity_tol)
+        self._feedforward = feedforward
+        self._owner = owner
+        self.size = reference_size(n_links)
+        self._cache: tuple[int, F64, F64] | None = None
+        self._path_start = np.zeros((1, 2))
+        self.initial_angles: F64 | None = None
+        if n_links == 2:
+            _, desired = self._block(0)
+            start = self._path_start if self._smoothed else desired[:1]  # the law's first point
+            theta = np.empty((1, 2))
+            self._joint_path(start, np.zeros((1, 2)), np.zeros((1, 2)), theta, 0)
+            self.initial_angles = theta[0]
+
+    def rows(self, k0: int, k1: int) -> tuple[F64, F64]:
+        """``r`` (shape (k1 - k0, size)) and the desired path (shape (k1 - k0, 2), m)
+        at instants ``k0 <= k < k1``."""
+        r = np.empty((k1 - k0, self.size))
+        desired = np.empty((k1 - k0, 2))
+        b = (k0 // BLOCK) * BLOCK
+        while b < k1:
+            rb, db = self._block(b)
+            lo, hi = max(b, k0), min(b + BLOCK, k1)
+            r[lo - k0 : hi - k0] = rb[lo - b : hi - b]
+            desired[lo - k0 : hi - k0] = db[lo - b : hi - b]
+            b += BLOCK
+        return r, desired
+
+    def _block(self, b0: int) -> tuple[F64, F64]:
+        """The block of instants starting at ``b0`` (a multiple of :data:`BLOCK`)."""
+        if self._cache is not None and self._cache[0] == b0:
+            return self._cache[1], self._cache[2]
+        n_links, dt = self._n_links, self._dt
+        b1 = min(b0 + BLOCK, self._n_rows)
+        # a sensed point needs its velocity at the neighbours for its acceleration
+        halo = self._levers is not None and self._n_rows > 2
+        e0 = max(b0 - 1, 0) if halo else b0
+        e1 = min(b1 + 1, self._n_rows) if halo else b1
+        t = np.arange(e0, e1, dtype=np.float64) * dt
+        pos, vel, acc = (np.asarray(a, dtype=float) for a in self._path(t - self._delay))
+        inner = slice(b0 - e0, b1 - e0)
+        if b0 == 0:
+            self._path_start = pos[:1].copy()
+        if self._plain:
+            desired = pos[inner]
+        else:
+            desired = np.asarray(self._trajectory.evaluate(t[inner])[0], dtype=float)
+        r = np.zeros((b1 - b0, self.size))
+        rp, rv, ra = r_position(n_links), r_velocity(n_links), r_acceleration(n_links)
+        r[:, rp : rp + 2], r[:, rv : rv + 2], r[:, ra : ra + 2] = pos[inner], vel[inner], acc[inner]
+        if n_links == 2:
+            theta, dtheta, ddtheta = (np.empty((e1 - e0, 2)) for _ in range(3))
+            self._joint_path(pos, vel, acc, theta, e0, dtheta, ddtheta)
+            r[:, r_angles(2) : r_angles(2) + 2] = theta[inner]
+            r[:, r_rates(2) : r_rates(2) + 2] = dtheta[inner]
+            r[:, r_angle_accelerations(2) : r_angle_accelerations(2) + 2] = ddtheta[inner]
+            if self._feedforward is not None:
+                r[:, r_feedforward(2) : r_feedforward(2) + 2] = self._feedforward(
+                    theta[inner], dtheta[inner], ddtheta[inner]
+                )
+            if self._levers is not None:
+                p_r, v_r = rigid_point(self._levers, theta, dtheta)
+                assert v_r is not None
+                r[:, rp : rp + 2], r[:, rv : rv + 2] = p_r[inner], v_r[inner]
+                r[:, ra : ra + 2] = _central_differences(v_r, dt, e0, b0, b1, self._n_rows)
+        self._cache = (b0, r, desired)
+        return r, desired
+
+    def _joint_path(
+        self,
+        pos: F64,
+        vel: F64,
+        acc: F64,
+        theta: F64,
+        k0: int,
+        dtheta: F64 | None = None,
+        ddtheta: F64 | None = None,
+    ) -> None:
+        """The compiled joint path of rows starting at instant ``k0``, with the
+        messages of :func:`joint_path` for a path out of reach or singular."""
+        from .reference_kernels import SINGULAR, UNREACHABLE, joint_path_rows
+
+        dtheta = np.empty_like(theta) if dtheta is None else dtheta
+        ddtheta = np.empty_like(theta) if ddtheta is None else ddtheta
+        l1, l2 = (float(v) for v in self._lengths)
+        code, row, value = joint_path_rows(
+            l1, l2, self._sign, self._tol, pos, vel, acc, theta, dtheta, ddtheta
+        )
+        if code == UNREACHABLE:
+            raise InvalidValueError(
+                f"The 'trajectory' parameter of {self._owner} must stay inside the arm's "
+                f"workspace: every point reachable, at a distance in [{abs(l1 - l2)}, {l1 + l2}] m "
+                f"from the base. "
+                f"Got {pos[row].tolist()} m ({value:.6g} m from the base) at "
+                f"t = {(k0 + row) * self._dt:.6g} s instead."
+            )
+        if code == SINGULAR:
+            raise InvalidValueError(
+                f"The 'trajectory' parameter of {self._owner} must stay clear of "
+                f"singularities, with |det J| / (L1 L2) >= {self._tol}. Got {value:.3g} at "
+                f"t = {(k0 + row) * self._dt:.6g} s, at {pos[row].tolist()} m instead."
+            )
+
+
+def _central_differences(v: F64, dt: float, e0: int, b0: int, b1: int, n_rows: int) -> F64:
+    """d/dt of ``v`` (rows of instants ``e0 ..``) at instants ``b0 <= k < b1``:
+    central differences inside the run, one-sided at its two ends (as
+    ``numpy.gradient``), zero for a run of two instants or fewer."""
+    out = np.zeros((b1 - b0, v.shape[1]))
+    if n_rows <= 2:
+        return out
+    lo, hi = max(b0, 1), min(b1, n_rows - 1)  # instants with both neighbours
+    if hi > lo:
+        out[lo - b0 : hi - b0] = (v[lo + 1 - e0 : hi + 1 - e0] - v[lo - 1 - e0 : hi - 1 - e0]) / (
+            2.0 * dt
+        )
+    if b0 == 0:
+        out[0] = (v[1 - e0] - v[0 - e0]) / dt
+    if b1 == n_rows:
+        out[-1] = (v[n_rows - 1 - e0] - v[n_rows - 2 - e0]) / dt
+    return out
+
+
 def reference_signals(
     arm: KinematicArm,
     trajectory: Trajectory,
@@ -257,85 +476,26 @@ def reference_signals(
     smoothing: float = 0.0,
     owner: str = "simulate",
 ) -> ReferenceSignals:
-    """The reference ``r`` at the control instants ``t`` (module docstring).
-
-    Parameters
-    ----------
-    arm : FlexibleArm or alike
-    trajectory : Trajectory
-        The desired end-effector path.
-    t : ndarray, shape (K,)
-        Control instants, s.
-    shaper : Shaper, optional
-        Input shaper applied to the path.
-    delay : float
-        Delay of the reference fed to the law, s (0: none).
-    point : (link, distance), optional
-        A sensed point short of the end effector (two-link arms): the
-        operational-space command becomes that point's path.
-    elbow : {"positive", "negative"}
-        Inverse-kinematics branch.
-    singularity_tol : float
-        Passed to :func:`joint_path`.
-    smoothing : float
-        Standard deviation of the zero-phase Gaussian smoothing of the path, s
-        (0: none; :func:`smoothed_path`).
-    feedforward : callable, optional
-        ``feedforward(theta, dtheta, ddtheta) -> tau`` (arrays (K, n_links); e.g.
-        :class:`flexarm.control.feedforward.RigidDynamics`): the torques put in
-        the reference's feedforward columns (zero without it).
-    owner : str
-        Named in error messages.
-    """
-    n_links = int(arm.n_links)
-    path: PathFunction = trajectory.evaluate
-    if smoothing > 0.0:
-        path = smoothed_path(path, smoothing, float(t[1] - t[0]) if t.shape[0] > 1 else 1.0)
-    if shaper is not None:
-        path = shaper.apply_function(path)
-    pos, vel, acc = (np.asarray(a, dtype=float) for a in path(t - delay))
-    plain = shaper is None and delay == 0.0 and smoothing == 0.0
-    desired = pos if plain else np.asarray(trajectory.evaluate(t)[0], dtype=float)
-    r = np.zeros((t.shape[0], reference_size(n_links)))
-    rp, rv, ra = r_position(n_links), r_velocity(n_links), r_acceleration(n_links)
-    r[:, rp : rp + 2], r[:, rv : rv + 2], r[:, ra : ra + 2] = pos, vel, acc
-    initial = None
-    if n_links == 2:
-        theta, dtheta, ddtheta = joint_path(
-            arm, pos, vel, acc, elbow=elbow, singularity_tol=singularity_tol, times=t, owner=owner
-        )
-        assert ddtheta is not None
-        r[:, r_angles(n_links) : r_angles(n_links) + n_links] = theta
-        r[:, r_rates(n_links) : r_rates(n_links) + n_links] = dtheta
-        r[:, r_angle_accelerations(n_links) : r_angle_accelerations(n_links) + n_links] = ddtheta
-        if feedforward is not None:
-            r[:, r_feedforward(n_links) : r_feedforward(n_links) + n_links] = feedforward(
-                theta, dtheta, ddtheta
-            )
-        start = pos[:1] if smoothing > 0.0 else desired[:1]  # where the law's reference starts
-        initial = joint_path(
-            arm,
-            start,
-            np.zeros_like(start),
-            elbow=elbow,
-            singularity_tol=singularity_tol,
-            times=t[:1],
-            owner=owner,
-        )[0][0]
-        if point is not None:
-            levers = lever_lengths(arm.link_lengths, *point)
-            p_r, v_r = rigid_point(levers, theta, dtheta)
-            assert v_r is not None
-            r[:, rp : rp + 2], r[:, rv : rv + 2] = p_r, v_r
-            dt = float(t[1] - t[0]) if t.shape[0] > 1 else 1.0
-            r[:, ra : ra + 2] = np.gradient(v_r, dt, axis=0) if t.shape[0] > 2 else 0.0
-    elif point is not None or feedforward is not None:
-        what = "sensor" if point is not None else "feedforward"
-        raise InvalidValueError(
-            f"The '{what}' parameter of {owner} needs joint references, which need inverse "
-            f"kinematics (two-link arms). Got a {n_links}-link arm instead."
-        )
-    return ReferenceSignals(reference=r, desired=desired, initial_angles=initial)
+    """The reference ``r`` at all the control instants ``t = k dt`` of a run at once
+    (:class:`ReferencePipeline`, whose parameters these are; ``t`` must be
+    ``arange(K) * dt``)."""
+    dt = float(t[1] - t[0]) if t.shape[0] > 1 else 1.0
+    pipeline = ReferencePipeline(
+        arm,
+        trajectory,
+        dt,
+        t.shape[0] - 1,
+        shaper=shaper,
+        delay=delay,
+        point=point,
+        elbow=elbow,
+        singularity_tol=singularity_tol,
+        feedforward=feedforward,
+        smoothing=smoothing,
+        owner=owner,
+    )
+    r, desired = pipeline.rows(0, t.shape[0])
+    return ReferenceSignals(reference=r, desired=desired, initial_angles=pipeline.initial_angles)
 
 
 def smoothed_path(path: PathFunction, sigma: float, step: float) -> PathFunction:

@@ -8,6 +8,7 @@ and :class:`SimulationError` carries the partial result of a run that diverged.
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 from collections.abc import Mapping
@@ -179,17 +180,34 @@ class SimulationResult:
         """Column names and a 2-D array of the main series: t, q, dq, tau, desired,
         reference and tip positions, error (what ``timeseries.csv`` and
         :meth:`to_pandas` hold)."""
+        return self._table_rows(0, self.t.shape[0])
+
+    def _table_rows(self, k0: int, k1: int) -> tuple[list[str], F64]:
+        """:meth:`table` of rows ``k0 <= k < k1``."""
         names = list(self.coordinate_names)
         header = ["t", *names, *(f"d{n}" for n in names)]
         header += [f"tau{i + 1}" for i in range(self.n_links)]
         header += ["x_desired", "y_desired"]
-        columns = [self.t, self.q, self.dq, self.tau, self.desired]
+        rows = slice(k0, k1)
+        tip, desired = self.tip[rows], self.desired[rows]
+        columns = [self.t[rows], self.q[rows], self.dq[rows], self.tau[rows], desired]
         if self.reference.shape[1]:
             header += ["x_ref", "y_ref"]
-            columns.append(self.reference[:, :2])
+            columns.append(self.reference[rows, :2])
         header += ["x_tip", "y_tip", "error"]
-        columns += [self.tip, self.error]
+        columns += [tip, np.linalg.norm(tip - desired, axis=1)]
         return header, np.column_stack(columns)
+
+    def _write_csv(self, path: Path, rows_per_chunk: int = 16384) -> None:
+        """``timeseries.csv``: :meth:`table` written a chunk of rows at a time (bounded
+        memory; each chunk formatted in one operation)."""
+        header, _ = self._table_rows(0, 0)
+        line = ",".join(["%.10g"] * len(header)) + "\n"
+        with open(path, "w", encoding="ascii", newline="") as fh:
+            fh.write(",".join(header) + "\n")
+            for k0 in range(0, self.t.shape[0], rows_per_chunk):
+                _, block = self._table_rows(k0, k0 + rows_per_chunk)
+                fh.write((line * block.shape[0]) % tuple(block.ravel().tolist()))
 
     def to_pandas(self) -> pd.DataFrame:
         """A ``pandas.DataFrame`` of :meth:`table` indexed by time (pandas is
@@ -244,15 +262,7 @@ class SimulationResult:
         with output_directory(out) as tmp:
             self.save(tmp / "result.npz")
             (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-            header, table = self.table()
-            np.savetxt(
-                tmp / "timeseries.csv",
-                table,
-                fmt="%.10g",
-                delimiter=",",
-                header=",".join(header),
-                comments="",
-            )
+            self._write_csv(tmp / "timeseries.csv")
             fig = self.plot()
             FigureCanvasAgg(fig)
             fig.savefig(tmp / "tracking.png", dpi=100)
@@ -281,8 +291,10 @@ class SimulationResult:
         ax_xy = fig.add_subplot(grid[:, 0])
         ax_err = fig.add_subplot(grid[0, 1])
         ax_def = fig.add_subplot(grid[1, 1], sharex=ax_err)
-        ax_xy.plot(self.desired[:, 0], self.desired[:, 1], "k--", lw=1, label="desired")
-        ax_xy.plot(self.tip[:, 0], self.tip[:, 1], lw=1.2, label="end effector")
+        stride = max(1, self.t.shape[0] // _PLOT_POINTS)  # a path far finer than the page
+        desired, tip = self.desired[::stride], self.tip[::stride]
+        ax_xy.plot(desired[:, 0], desired[:, 1], "k--", lw=1, label="desired")
+        ax_xy.plot(tip[:, 0], tip[:, 1], lw=1.2, label="end effector")
         ax_xy.set(
             xlabel="x (m)",
             ylabel="y (m)",
@@ -290,15 +302,42 @@ class SimulationResult:
             title=f"{self.info.get('controller', '')}, sensor {self.info.get('sensor', '')}",
         )
         ax_xy.legend(loc="best", fontsize="small")
-        ax_err.plot(self.t, 1e3 * self.error, lw=1)
+        ax_err.plot(*envelope(self.t, 1e3 * self.error, _PLOT_POINTS), lw=1)
         ax_err.set(ylabel="error (mm)")
         for tc in self.corner_times:
             ax_err.axvline(tc, color="0.8", lw=0.8, zorder=0)
         for i in range(self.n_links):
-            ax_def.plot(self.t, 1e3 * self.link_deflections[:, i], lw=1, label=f"link {i + 1}")
+            deflection = envelope(self.t, 1e3 * self.link_deflections[:, i], _PLOT_POINTS)
+            ax_def.plot(*deflection, lw=1, label=f"link {i + 1}")
         ax_def.set(xlabel="t (s)", ylabel="tip deflection (mm)")
         ax_def.legend(loc="best", fontsize="small")
         return fig
+
+
+_PLOT_POINTS = 5000
+"""Points per plotted series beyond which a plot shows an envelope (the page has
+fewer pixels; a 600 s run recorded at 5 kHz would otherwise draw 3 million)."""
+
+
+def envelope(t: F64, y: F64, max_points: int) -> tuple[F64, F64]:
+    """``(t, y)`` as at most about ``max_points`` points that draw the same line at
+    page resolution: in each of ``max_points // 2`` buckets, the smallest and the
+    largest value in time order (peaks and NaN gaps kept). Short series are
+    returned as they are."""
+    n = t.shape[0]
+    buckets = max_points // 2
+    if n <= max_points or buckets < 1:
+        return t, y
+    edges = np.linspace(0, n, buckets + 1).astype(np.int64)
+    keep: list[int] = []
+    for a, b in itertools.pairwise(edges.tolist()):
+        seg = y[a:b]
+        if not np.any(np.isfinite(seg)):
+            keep.append(a)  # a NaN: the gap stays a gap
+            continue
+        keep += sorted({a + int(np.nanargmin(seg)), a + int(np.nanargmax(seg))})
+    rows = np.array(keep, dtype=np.int64)
+    return t[rows], y[rows]
 
 
 def _float(value: JSONValue, default: float) -> float:

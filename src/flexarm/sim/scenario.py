@@ -221,6 +221,7 @@ class Scenario:
             "smoothing": s.smoothing,
             "feedforward": s.feedforward,
             "check_sampling": s.check_sampling,
+            "record_every": s.record_every,
         }
 
 

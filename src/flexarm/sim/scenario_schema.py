@@ -341,6 +341,8 @@ class SimulationSettings:
         controller asks for).
     check_sampling : bool
         Refuse a control period beyond the sampled loop's stability bound.
+    record_every : int
+        Record every ``record_every``-th control instant and the last (>= 1).
     """
 
     duration: float | None = None
@@ -353,6 +355,7 @@ class SimulationSettings:
     smoothing: float = 0.0
     feedforward: bool | None = None
     check_sampling: bool = True
+    record_every: int = 1
 
     def __post_init__(self) -> None:
         owner = "SimulationSettings"
@@ -361,6 +364,7 @@ class SimulationSettings:
             set_(self, "duration", check_real(self.duration, "duration", owner, positive=True))
         set_(self, "dt", check_real(self.dt, "dt", owner, positive=True))
         set_(self, "substeps", check_int(self.substeps, "substeps", owner, minimum=1))
+        set_(self, "record_every", check_int(self.record_every, "record_every", owner, minimum=1))
         if self.torque_limit is not None:
             limit = check_array(self.torque_limit, "torque_limit", owner, finite=False)
             if limit.ndim > 1 or limit.dtype.kind == "c" or not np.all(limit > 0):

@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import TypedDict
 
@@ -45,7 +44,7 @@ from ...model.arm import FlexibleArm
 from ...model.link import Link
 from ...sensing.delays import DelayModel
 from ...sensing.sensors import PointSensor, TipSensor
-from ...sim.closed_loop import simulate
+from ...sim.batch import Outcome, simulate_many
 from ...sim.results import SimulationError
 
 __all__ = [
@@ -287,12 +286,28 @@ class Beyond:
         )
 
 
-def _run(
-    law_name: str, law: Controller, sensor_name: str, row: Row, duration: float | None, dt: float
-) -> RowResult:
+def _simulation(job: Job, duration: float | None, dt: float) -> dict[str, object]:
+    """The arguments of :func:`flexarm.simulate` for one job."""
+    _, law, sensor_name, row = job
     base = SENSORS[sensor_name]
-    sensor = dataclasses.replace(base, noise_std=row.noise, rate_noise_std=10 * row.noise)
-    delay = DelayModel(row.delay_s, "exact") if row.delay_s > 0 else None
+    return {
+        "arm": row.plant(),
+        "controller": law,
+        "trajectory": Square(),
+        "sensor": dataclasses.replace(base, noise_std=row.noise, rate_noise_std=10 * row.noise),
+        "delay": DelayModel(row.delay_s, "exact") if row.delay_s > 0 else None,
+        "duration": duration,
+        "dt": dt,
+        "smoothing": SMOOTHING,
+        "rng": 0,
+        "progress": False,
+    }
+
+
+def _row_result(job: Job, outcome: Outcome) -> RowResult:
+    """A job's row from its run's outcome (a divergence is a result; any other
+    exception is raised)."""
+    law_name, _, sensor_name, row = job
     out = RowResult(
         law=law_name,
         sensor=sensor_name,
@@ -303,28 +318,25 @@ def _run(
         max_error_m=None,
         max_torque_Nm=None,
     )
-    try:
-        res = simulate(
-            row.plant(),
-            law,
-            Square(),
-            sensor=sensor,
-            delay=delay,
-            duration=duration,
-            dt=dt,
-            smoothing=SMOOTHING,
-            rng=0,
-            progress=False,
-        )
-    except SimulationError as exc:
+    if isinstance(outcome, SimulationError):
         out["status"] = "diverged"
-        out["diverged_at_s"] = float(exc.time)
+        out["diverged_at_s"] = float(outcome.time)
         return out
-    m = res.metrics()
+    if isinstance(outcome, Exception):
+        raise outcome
+    m = outcome.metrics()
     for key in ("rms_error_m", "max_error_m", "max_torque_Nm"):
         value = m[key]
         out[key] = float(value) if isinstance(value, int | float) else None
     return out
+
+
+def _run_jobs(
+    jobs: Sequence[Job], duration: float | None, dt: float, workers: int
+) -> list[RowResult]:
+    runs = [_simulation(job, duration, dt) for job in jobs]
+    outcomes = simulate_many(runs, workers=workers, errors="return", progress=False)
+    return [_row_result(job, outcome) for job, outcome in zip(jobs, outcomes, strict=True)]
 
 
 def choose_candidate(results: Sequence[RowResult], sensor: str) -> str:
@@ -351,12 +363,7 @@ def run_beyond(duration: float | None, dt: float, *, workers: int = 1) -> Beyond
     reflected = ReflectedTipPD.from_arm(design, alpha=0.9 * alpha)
     jobs += [("reflected", reflected, "tip", row) for row in ROWS]
 
-    def run(job: Job) -> RowResult:
-        law_name, law, sensor, row = job
-        return _run(law_name, law, sensor, row, duration, dt)
-
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        results = list(pool.map(run, jobs))
+    results = _run_jobs(jobs, duration, dt, workers)
     chosen = {sensor: choose_candidate(results, sensor) for sensor in SENSORS}
     nominal = ROWS[0]
     extra: list[Job] = []
@@ -368,8 +375,7 @@ def run_beyond(duration: float | None, dt: float, *, workers: int = 1) -> Beyond
         for k in FUZZY_KS:
             law = LQG(model=design, ks=k, **kw)  # type: ignore[arg-type]
             extra.append((f"lqg fuzzy ks {k:g}", law, sensor, nominal))
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        results += list(pool.map(run, extra))
+    results += _run_jobs(extra, duration, dt, workers)
     beyond = Beyond(chosen, results, alpha)
     beyond.targets = _targets(beyond)
     elbow = [float(x) for x in np.linspace(*_elbow_range(), 9)]

@@ -22,12 +22,12 @@ from __future__ import annotations
 import dataclasses
 import sys
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 
 import numpy as np
 
 from ...control.linearize import closed_loop_poles
+from ...sim.batch import Outcome, iter_simulations
 from ...sim.closed_loop import simulate
 from ...sim.results import SimulationError
 from ...sim.scenario import Scenario
@@ -41,7 +41,7 @@ from .cases import (
     Metrics,
 )
 
-__all__ = ["Progress", "RunMatrix", "progress_printer", "run_case", "square_side"]
+__all__ = ["Progress", "RunMatrix", "case_result", "progress_printer", "run_case", "square_side"]
 
 Progress = Callable[[int, int, Case], None]
 """Called after each finished run with ``(done, total, case)``."""
@@ -133,7 +133,8 @@ class RunMatrix:
         workers: int = 1,
         progress: Progress | None = None,
     ) -> tuple[list[CaseResult], list[CaseResult], list[CaseResult]]:
-        """Run every distinct case once (in parallel threads; the compiled loop releases the GIL).
+        """Run every distinct case once, on ``workers`` cores
+        (:func:`flexarm.sim.batch.iter_simulations`).
 
         Parameters
         ----------
@@ -152,17 +153,19 @@ class RunMatrix:
             In the order of the attributes; a run shared by several cases is
             the same result, relabelled with each case.
         """
-        unique = self.unique()
+        unique = list(self.unique().items())
+        scenarios = [
+            Scenario.from_dict(case.scenario_dict(duration, dt), source=_SOURCE)
+            for _, case in unique
+        ]
+        runs = [{"arm": sc.arm, **sc.simulate_kwargs(), "progress": False} for sc in scenarios]
         results: dict[tuple[str | float, ...], CaseResult] = {}
-        with ThreadPoolExecutor(max_workers=workers) as pool:
-            futures = {
-                pool.submit(run_case, case, duration, dt): key for key, case in unique.items()
-            }
-            for done, fut in enumerate(as_completed(futures), start=1):
-                key = futures[fut]
-                results[key] = fut.result()
-                if progress is not None:
-                    progress(done, len(unique), unique[key])
+        outcomes = iter_simulations(runs, workers=workers, errors="return", progress=False)
+        for done, (i, outcome) in enumerate(outcomes, start=1):
+            key, case = unique[i]
+            results[key] = case_result(case, scenarios[i], outcome)
+            if progress is not None:
+                progress(done, len(unique), case)
 
         def pick(cases: tuple[Case, ...]) -> list[CaseResult]:
             out = []
@@ -188,21 +191,32 @@ def run_case(case: Case, duration: float | None, dt: float) -> CaseResult:
         Control period, s.
     """
     scenario = Scenario.from_dict(case.scenario_dict(duration, dt), source=_SOURCE)
+    try:
+        outcome: Outcome = simulate(scenario.arm, **scenario.simulate_kwargs(), progress=False)
+    except SimulationError as exc:
+        outcome = exc
+    return case_result(case, scenario, outcome)
+
+
+def case_result(case: Case, scenario: Scenario, outcome: Outcome) -> CaseResult:
+    """The :class:`CaseResult` of ``case`` run as ``scenario`` from the run's outcome
+    (a result, or the :class:`SimulationError` of a run that diverged; any other
+    exception is raised)."""
     delay_s = scenario.delay.delay
     start = np.asarray(scenario.trajectory.evaluate(np.zeros(1))[0][0], dtype=float)
     poles = closed_loop_poles(scenario.arm, scenario.controller, start, scenario.sensor)
     pole = float(poles[0].real)
-    try:
-        result = simulate(scenario.arm, **scenario.simulate_kwargs(), progress=False)
-    except SimulationError as exc:
-        partial = exc.result
+    if isinstance(outcome, SimulationError):
+        partial = outcome.result
         wall = partial.info.get("wall_time_s")
         metrics: Metrics = {
-            "sim_time_s": float(exc.time),
+            "sim_time_s": float(outcome.time),
             "wall_time_s": float(wall) if isinstance(wall, int | float) else None,
         }
-        return CaseResult(case, "diverged", float(exc.time), metrics, delay_s, pole, partial)
-    return CaseResult(case, "ok", None, result.metrics(), delay_s, pole, result)
+        return CaseResult(case, "diverged", float(outcome.time), metrics, delay_s, pole, partial)
+    if isinstance(outcome, Exception):
+        raise outcome
+    return CaseResult(case, "ok", None, outcome.metrics(), delay_s, pole, outcome)
 
 
 def square_side() -> float:

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Sequence
 
 from ..._validation import check_int, check_option, check_real
 from ...errors import InvalidValueError
+from ...sim.batch import default_workers
 from .beyond import run_beyond
 from .cases import (
     ADAPTATION_LAWS,
@@ -70,8 +70,8 @@ def reproduce(
         "Tracks well" means RMS error <= ``tolerance`` x the square's side
         (:mod:`~flexarm.studies.reproduction.verdicts`).
     workers : int, optional
-        Runs in parallel (threads; the compiled loop releases the GIL).
-        Default: the CPU count, at most 4.
+        Runs in parallel (:func:`flexarm.simulate_many`: threads, the compiled loop
+        releases the GIL). Default: every core this process may use.
     progress : bool or callable, optional
         ``True`` prints one line per finished run on stderr; a callable gets
         ``(done, total, case)``. Default: on when stderr is a terminal.
@@ -94,8 +94,7 @@ def reproduce(
             "when sensitivity is on. Got an empty one instead."
         )
     tolerance = check_real(tolerance, "tolerance", _OWNER, positive=True)
-    if workers is None:
-        workers = min(4, os.cpu_count() or 1)
+    workers = default_workers() if workers is None else workers
     workers = check_int(workers, "workers", _OWNER, minimum=1)
 
     if sensitivity:
