@@ -18,8 +18,12 @@ rules, MIN / MIN / MAX, centroid), evaluated at inputs drawn uniformly from
     and a row view, is included).
 ``evaluate_many, batch``
     :func:`flexarm.fuzzy.evaluate_many` on ``--batch`` rows, called from Python.
+``fls(d1, d2), public call``
+    The public vectorised call :meth:`FuzzySystem.__call__` on ``--public-batch``
+    points (10**6 by default) with its default backend: the compiled kernel, in
+    chunks on every core (input checks, stacking and the threads included).
 ``fls(d1, d2), NumPy batch``
-    The vectorised reference path :meth:`FuzzySystem.__call__` on
+    The same call with ``backend="numpy"`` (exact integration in NumPy) on
     ``--py-batch`` points (it defuzzifies once per distinct set of rule
     strengths; random inputs make every point distinct).
 
@@ -127,11 +131,11 @@ def bench_evaluate_many(packed: Any, X: np.ndarray, repeat: int) -> dict:
     return measure(batch, repeat)
 
 
-def bench_numpy_batch(fls: FuzzySystem, X: np.ndarray, repeat: int) -> dict:
+def bench_numpy_batch(fls: FuzzySystem, X: np.ndarray, repeat: int, backend: str) -> dict:
     d1, d2 = X[:, 0].copy(), X[:, 1].copy()
 
     def batch() -> int:
-        fls(d1, d2)
+        fls(d1, d2, backend=backend)
         return X.shape[0]
 
     return measure(batch, repeat)
@@ -213,6 +217,7 @@ def run(args: argparse.Namespace, log: Callable[[str], None]) -> dict[str, Any]:
         "calls_compiled_loop": args.calls,
         "batch_evaluate_many": args.batch,
         "batch_numpy": args.py_batch,
+        "batch_public": args.public_batch,
         "calls_skfuzzy": args.skfuzzy_calls,
         "skfuzzy_universe_points": args.points,
         "repeat": args.repeat,
@@ -225,10 +230,11 @@ def run(args: argparse.Namespace, log: Callable[[str], None]) -> dict[str, Any]:
     X_loop = rng.uniform(LO, HI, (N_INPUTS, 2))
     X_many = rng.uniform(LO, HI, (args.batch, 2))
     X_py = rng.uniform(LO, HI, (args.py_batch, 2))
+    X_public = rng.uniform(LO, HI, (args.public_batch, 2))
     X_sk = rng.uniform(LO, HI, (args.skfuzzy_calls, 2))
 
     # the compiled path agrees with the NumPy reference
-    ref = fls(X_loop[:, 0], X_loop[:, 1])
+    ref = fls(X_loop[:, 0], X_loop[:, 1], backend="numpy")
     err = float(np.max(np.abs(evaluate_many(packed, X_loop) - ref)))
     out["checks"]["evaluate_many vs fls(d1, d2) (max abs diff)"] = (err, CHECK_TOL_COMPILED)
 
@@ -239,7 +245,8 @@ def run(args: argparse.Namespace, log: Callable[[str], None]) -> dict[str, Any]:
     log("timing evaluate_many ...")
     res["flexarm evaluate_many, batch"] = bench_evaluate_many(packed, X_many, args.repeat)
     log("timing fls(d1, d2) ...")
-    res["flexarm fls(d1, d2), NumPy batch"] = bench_numpy_batch(fls, X_py, args.repeat)
+    res["flexarm fls(d1, d2), public call"] = bench_numpy_batch(fls, X_public, args.repeat, "auto")
+    res["flexarm fls(d1, d2), NumPy batch"] = bench_numpy_batch(fls, X_py, args.repeat, "numpy")
 
     if skfuzzy is not None:
         log(f"building the skfuzzy system ({args.points} points per universe) ...")
@@ -320,7 +327,12 @@ def main(argv: list[str] | None = None) -> int:
         help="evaluations per batch in the compiled loop",
     )
     p.add_argument("--batch", type=int, default=100_000, help="rows per evaluate_many call")
-    p.add_argument("--py-batch", type=int, default=10_000, help="points per fls(d1, d2) call")
+    p.add_argument(
+        "--public-batch", type=int, default=1_000_000, help="points per public fls(d1, d2) call"
+    )
+    p.add_argument(
+        "--py-batch", type=int, default=10_000, help="points per fls(d1, d2, backend='numpy')"
+    )
     p.add_argument(
         "--skfuzzy-calls", type=int, default=500, help="compute() calls per skfuzzy batch"
     )
@@ -329,7 +341,17 @@ def main(argv: list[str] | None = None) -> int:
     )
     p.add_argument("--json", action="store_true", help="print the results as JSON only")
     args = p.parse_args(argv)
-    if min(args.repeat, args.calls, args.batch, args.py_batch, args.skfuzzy_calls) < 1:
+    if (
+        min(
+            args.repeat,
+            args.calls,
+            args.batch,
+            args.py_batch,
+            args.public_batch,
+            args.skfuzzy_calls,
+        )
+        < 1
+    ):
         p.error("--repeat, --calls, --batch, --py-batch and --skfuzzy-calls must be >= 1")
     if args.points < 2:
         p.error("--points must be >= 2")

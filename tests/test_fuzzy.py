@@ -306,7 +306,8 @@ def test_compiled_paper_system_equals_python_path():
     fls = paper_system()
     rng = np.random.default_rng(5)
     x = rng.uniform(-6, 6, (150, 2))
-    np.testing.assert_allclose(evaluate_many(fls.compiled(), x), fls(x[:, 0], x[:, 1]), atol=1e-12)
+    python = fls(x[:, 0], x[:, 1], backend="numpy")
+    np.testing.assert_allclose(evaluate_many(fls.compiled(), x), python, atol=1e-12)
     assert evaluate(fls.compiled(), np.array([0.0, 0.0])) == pytest.approx(1 / 6, abs=1e-15)
 
 
@@ -317,7 +318,7 @@ def test_compiled_random_systems_equal_python_path(ops):
         fls = _random_system(rng, ops)
         x = rng.uniform(-1.2, 1.2, (15, 2))
         np.testing.assert_allclose(
-            evaluate_many(fls.compiled(), x), fls(x[:, 0], x[:, 1]), atol=1e-12
+            evaluate_many(fls.compiled(), x), fls(x[:, 0], x[:, 1], backend="numpy"), atol=1e-12
         )
 
 
@@ -328,6 +329,32 @@ def test_compiled_refuses_what_it_does_not_support():
     fls = FuzzySystem(paper_system().inputs[:1], y, (Rule(("N",), "G"),))
     with pytest.raises(ValueError, match="'output'"):
         fls.compiled()
+
+
+@pytest.mark.parametrize("ops", OPS, ids="-".join)
+def test_the_public_call_is_compiled_for_many_points(ops):
+    """Many points go to the compiled kernel (on every core past one chunk); the
+    answer is the NumPy path's to 1e-12, NaN for non-finite inputs, inputs clipped
+    to the universes alike."""
+    rng = np.random.default_rng([11, OPS.index(ops)])
+    fls = _random_system(rng, ops)
+    x = rng.uniform(-1.5, 1.5, (2, 3 * 2**15 + 17))
+    x[0, :3] = [np.nan, np.inf, -np.inf]
+    auto = fls(x[0], x[1])
+    compiled = fls(x[0], x[1], backend="compiled")
+    np.testing.assert_array_equal(auto, compiled)
+    np.testing.assert_array_equal(compiled, evaluate_many(fls.compiled(), x.T.copy()))
+    sample = np.r_[0:3, rng.integers(3, x.shape[1], 200)]
+    python = fls(x[0, sample], x[1, sample], backend="numpy")
+    np.testing.assert_allclose(compiled[sample], python, atol=1e-12)
+    assert np.all(np.isnan(compiled[:3]))
+
+
+def test_backend_is_checked():
+    with pytest.raises(ValueError, match="'backend'"):
+        paper_system()(0.0, 0.0, backend="fast")
+    with pytest.raises(ValueError, match=r"'backend'.*centroid"):
+        paper_system("bisector")(0.0, 0.0, backend="compiled")
 
 
 # ----------------------------------------------------------- vectorisation
