@@ -16,6 +16,13 @@ any keywords: ``{"arm": arm, "dt": 1e-4, "rng": 7}``) or a callable with no
 arguments that returns a :class:`~flexarm.sim.results.SimulationResult` (e.g.
 ``functools.partial(flexarm.simulate_open_loop, arm, t, torque)``).
 
+While a batch runs, the BLAS library under NumPy and SciPy is limited to one
+thread (:mod:`threadpoolctl`): the runs' small matrices (linearisations,
+Riccati equations, matrix exponentials) gain nothing from BLAS threads, which
+would only compete with the runs for the cores. The limit is process-wide and
+lasts until the batch ends (for :func:`iter_simulations`, until the generator is
+exhausted or closed).
+
 Seeds: give each run its own seed (an int ``rng``), not a shared
 :class:`numpy.random.Generator` (runs in threads would draw from it in an order
 that depends on timing).
@@ -114,7 +121,12 @@ def iter_simulations(
     source = iter(enumerate(runs))
     pending: dict[Future[SimulationResult], int] = {}
     done_count = 0
-    with ThreadPoolExecutor(max_workers=n_workers, thread_name_prefix="flexarm-run") as pool:
+    from threadpoolctl import threadpool_limits
+
+    with (
+        threadpool_limits(limits=1, user_api="blas"),
+        ThreadPoolExecutor(max_workers=n_workers, thread_name_prefix="flexarm-run") as pool,
+    ):
         try:
             while True:
                 while len(pending) < 2 * n_workers:
