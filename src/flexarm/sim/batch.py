@@ -23,6 +23,10 @@ would only compete with the runs for the cores. The limit is process-wide and
 lasts until the batch ends (for :func:`iter_simulations`, until the generator is
 exhausted or closed).
 
+A batch that ends early (the first error with ``errors="raise"``, the caller
+closing the generator, ``KeyboardInterrupt``) stops the runs in flight at their
+next chunk (:func:`flexarm.simulate`'s ``stop``) and starts no other.
+
 Seeds: give each run its own seed (an int ``rng``), not a shared
 :class:`numpy.random.Generator` (runs in threads would draw from it in an order
 that depends on timing).
@@ -32,6 +36,7 @@ from __future__ import annotations
 
 import os
 import sys
+import threading
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 
@@ -62,9 +67,9 @@ def default_workers() -> int:
         return os.cpu_count() or 1
 
 
-def _callable(run: Run, index: int) -> Callable[[], SimulationResult]:
+def _callable(run: Run, index: int, stop: threading.Event) -> Callable[[], SimulationResult]:
     if isinstance(run, Mapping):
-        kwargs = dict(run)
+        kwargs = {"stop": stop, **run}
         if "arm" not in kwargs:
             raise InvalidTypeError(
                 f"The 'runs' parameter of {_OWNER} must hold mappings with an 'arm' (the "
@@ -123,6 +128,8 @@ def iter_simulations(
     done_count = 0
     from threadpoolctl import threadpool_limits
 
+    stop = threading.Event()  # set when the batch ends early: runs in flight stop
+
     with (
         threadpool_limits(limits=1, user_api="blas"),
         ThreadPoolExecutor(max_workers=n_workers, thread_name_prefix="flexarm-run") as pool,
@@ -134,7 +141,7 @@ def iter_simulations(
                     if item is None:
                         break
                     index, run = item
-                    pending[pool.submit(_callable(run, index))] = index
+                    pending[pool.submit(_callable(run, index, stop))] = index
                 if not pending:
                     break
                 finished, _ = wait(pending, return_when=FIRST_COMPLETED)
@@ -151,6 +158,7 @@ def iter_simulations(
                     else:
                         yield index, future.result()
         finally:
+            stop.set()  # the batch is over: whatever still runs stops at its next chunk
             for future in pending:
                 future.cancel()
             if show:

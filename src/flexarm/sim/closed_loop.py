@@ -41,7 +41,7 @@ from ..model.kinematics import lever_lengths
 from ..model.plant import Plant, check_plant
 from ..sensing.delays import DelayModel, discretize, pade_state_space
 from ..sensing.sensors import Sensor, check_sensor
-from .driver import LoopOutputs, run_in_chunks, run_scipy
+from .driver import LoopOutputs, StopFlag, run_in_chunks, run_scipy
 from .loop import SensorArrays, loop_state, prime_delay_line, run, sensor_arrays
 from .references import BLOCK, PathShaper, ReferencePipeline
 from .results import SimulationError, SimulationResult, assemble_result
@@ -75,6 +75,7 @@ def simulate(
     smoothing: float = 0.0,
     check_sampling: bool = True,
     record_every: int = 1,
+    stop: StopFlag | None = None,
 ) -> SimulationResult:
     """Simulate ``arm`` under ``controller`` tracking ``trajectory``.
 
@@ -144,6 +145,10 @@ def simulate(
         default every instant). The run itself is the same; a long run then fits
         in bounded memory (the reference is computed block by block as it goes).
         The metrics are those of the recorded instants.
+    stop : threading.Event or alike, optional
+        Checked between chunks of the run (about every 2**15 control instants):
+        once set, the run ends with :class:`~flexarm.errors.Cancelled` (how an
+        interrupted batch stops its runs promptly).
 
     Returns
     -------
@@ -153,6 +158,8 @@ def simulate(
     ------
     SimulationError
         If the state diverges; the partial result is attached.
+    Cancelled
+        If ``stop`` was set before the run's end.
     InvalidValueError
         For a bad parameter, a path out of the arm's workspace, a control period
         at which the loop is sampled-data unstable, or a run that would need
@@ -329,7 +336,12 @@ def simulate(
             return int(status), int(k)
 
         status, k_end = run_in_chunks(
-            chunk, n_rows, n_rows * substeps * n, progress, block=None if whole else BLOCK
+            chunk,
+            n_rows,
+            n_rows * substeps * n,
+            progress,
+            block=None if whole is not None and stop is None else BLOCK,
+            stop=stop,
         )
     else:
         assert whole is not None
