@@ -47,7 +47,9 @@ def test_fit_with_two_known_points_recovers_the_nonlinearity(capsys, tmp_path, d
     u, y = np.loadtxt(path, delimiter=",", skiprows=1, unpack=True)
     model = HammersteinIdentifier(known_points=((0.0, 0.0), (1.8, 1.0))).fit(u, y)
     np.testing.assert_allclose(estimate, model.nonlinearity(x), rtol=1e-12, atol=1e-12)
-    assert summary["fit_percent"] == pytest.approx(model.score(u, y), rel=1e-12)
+    assert summary["fit_percent"] == pytest.approx(model.fit_percent(u, y), rel=1e-12)
+    assert summary["method"] == "white" and "looks white" in summary["reason"]
+    assert summary["baseline"]["fit_percent"] == pytest.approx(model.baseline_.fit_percent(u, y))
     # two-point normalisation: the estimate passes through the known points (up to the
     # interpolation between grid points 0.02 apart), and has the saturation's shape
     assert np.interp([0.0, 1.8], x, estimate) == pytest.approx([0.0, 1.0], abs=0.02)
@@ -114,7 +116,9 @@ def test_robot_experiment_writes_its_files(capsys, tmp_path):
         (("--grid", "100"), "unrecognized arguments: --grid"),
         (("--x", "nope"), "nope"),
         (("--torque-sensor",), "--torque-sensor"),
-        (("--seed", "3"), "--seed"),
+        (("--method", "colour"), "--method"),
+        (("--knots", "1"), "--knots"),
+        (("--bootstrap", "5"), "--bootstrap"),
     ],
 )
 def test_bad_options_are_one_line_and_write_nothing(capsys, tmp_path, data, extra, match):

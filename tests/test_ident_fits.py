@@ -67,7 +67,7 @@ def test_fit_hammerstein_is_the_identifier(uy, tmp_path):
     model = HammersteinIdentifier(n_lags=20, known_points=((0.0, 0.0), (1.5, 1.0))).fit(u, y)
     np.testing.assert_array_equal(res.phi, model.nonlinearity(res.grid))
     np.testing.assert_array_equal(res.y_hat, model.predict(u))
-    assert res.fit_percent == model.score(u, y) and res.normalisation == "two-point"
+    assert res.fit_percent == model.fit_percent(u, y) and res.normalisation == "two-point"
     paths = res.save(tmp_path / "h")
     assert [p.name for p in paths] == [
         "nonlinearity.csv",

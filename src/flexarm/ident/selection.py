@@ -1,0 +1,356 @@
+r"""Choosing the order and the knots of an ARX-Hammerstein model from held-out data.
+
+The record is split in time: the first ``1 - validation_fraction`` estimates
+every candidate structure (:func:`flexarm.ident.arx.fit_structure`), the rest
+validates it by its **free-run** mean square error (the model simulated from
+rest over the whole record, scored on the held-out samples). A free-run
+error punishes a surplus of poles and zeros that a one-step or
+impulse-response criterion such as BIC on a noisy impulse response lets
+through.
+
+Candidates
+----------
+Orders ``l = 1 .. max_order`` and knot counts on a geometric grid
+(:data:`KNOT_GRID`, ``K = 2`` being the linear model), with at least
+:data:`ROWS_PER_PARAMETER` estimation rows per parameter. The linear models
+(``K = 2``) are tried at every order: they are the baseline. The nonlinear
+ones are searched by coordinates: the orders at :data:`START_KNOTS` knots,
+then the knots at the best order, then the orders at the best knots, and so
+on until the pair repeats (at most :data:`ROUNDS` rounds; an order scan stops
+after :data:`PATIENCE` orders without improvement).
+
+Choice: the one-standard-error rule
+-----------------------------------
+Among the candidates whose validation error is within one standard error of
+the smallest, the one with the fewest parameters is chosen (Breiman et al.
+1984, §3.4.3; Hastie, Tibshirani & Friedman 2009, §7.10). The standard error
+of the difference of two candidates' errors is taken from :data:`BATCHES`
+contiguous batch means of the validation part, which allows for the errors'
+serial correlation. The same rule restricted to ``K = 2`` chooses the linear
+baseline; the nonlinear part **helps** only if the chosen model is nonlinear,
+i.e. it beats every linear model by more than a standard error.
+
+With more than :data:`MAX_ROWS` estimation rows the sums of the candidates
+use every ``s``-th row (a systematic subsample); the final fit uses all rows.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .arx import Located, StructureFit, fit_structure, n_params
+
+__all__ = [
+    "BATCHES",
+    "BURN_IN",
+    "KNOT_GRID",
+    "MAX_ROWS",
+    "PATIENCE",
+    "ROUNDS",
+    "ROWS_PER_PARAMETER",
+    "START_KNOTS",
+    "Candidate",
+    "Selection",
+    "final_fit",
+    "select_structure",
+]
+
+F64 = NDArray[np.float64]
+
+#: Knot counts tried (2: linear).
+KNOT_GRID: tuple[int, ...] = (2, 3, 4, 6, 8, 11, 16, 23, 32, 45, 64, 91, 128)
+#: Knots of the first order scan.
+START_KNOTS = 8
+#: Estimation rows required per parameter of the over-parameterised regression.
+ROWS_PER_PARAMETER = 10
+#: Orders scanned past the best one before an order scan stops.
+PATIENCE = 2
+#: Rounds of the coordinate search (orders, then knots) at most.
+ROUNDS = 3
+#: Batches of the validation part for the standard errors.
+BATCHES = 20
+#: Estimation rows summed per candidate at most (a systematic subsample beyond).
+MAX_ROWS = 2**16
+#: A candidate's free run starts this many samples before the validation part (from rest).
+BURN_IN = 2**14
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One structure tried: order, knots, and its free-run error on held-out data.
+
+    Attributes
+    ----------
+    order : int
+        ``l``.
+    n_knots : int
+        ``K`` (2: linear).
+    n_params : int
+        ``l + (l + 1) (K - 1)``.
+    validation_mse : float
+        Free-run mean square error on the validation part (units of ``y``
+        squared); ``inf`` if no stable model came out.
+    estimator : str
+        ``"least squares"``, ``"instrumental variables"`` or ``"unstable"``.
+    """
+
+    order: int
+    n_knots: int
+    n_params: int
+    validation_mse: float
+    estimator: str
+    batch_mse: F64 = field(repr=False, compare=False)
+    fit: StructureFit | None = field(repr=False, compare=False)
+
+    @property
+    def linear(self) -> bool:
+        """Whether the candidate is a linear model (two knots)."""
+        return self.n_knots == 2
+
+    def summary(self) -> dict[str, object]:
+        """Plain values (``validation_mse`` None when unstable)."""
+        mse = self.validation_mse
+        return {
+            "order": self.order,
+            "n_knots": self.n_knots,
+            "n_params": self.n_params,
+            "validation_mse": mse if math.isfinite(mse) else None,
+            "estimator": self.estimator,
+        }
+
+
+def _standard_error(c: Candidate, ref: Candidate) -> float:
+    """Batch-means standard error of ``c.validation_mse - ref.validation_mse``."""
+    d = c.batch_mse - ref.batch_mse
+    return float(np.std(d, ddof=1) / math.sqrt(d.shape[0])) if d.shape[0] > 1 else 0.0
+
+
+def _one_se(cands: list[Candidate]) -> tuple[Candidate, Candidate]:
+    """``(chosen, best)``: the fewest parameters within one standard error of the best."""
+    best = min(cands, key=lambda c: (c.validation_mse, c.n_params))
+    within = [
+        c
+        for c in cands
+        if c.validation_mse - best.validation_mse <= _standard_error(c, best) or c is best
+    ]
+    return min(within, key=lambda c: (c.n_params, c.validation_mse)), best
+
+
+@dataclass(frozen=True)
+class Selection:
+    """The structures tried and the choice (module docstring).
+
+    Attributes
+    ----------
+    candidates : tuple of Candidate
+        Every structure tried, in the order tried.
+    chosen : Candidate
+        The structure kept (one-standard-error rule).
+    best : Candidate
+        The smallest validation error.
+    linear : Candidate
+        The linear baseline's structure (the same rule among ``K = 2``).
+    n_estimation, n_validation : int
+        Samples of the two parts.
+    stride : int
+        Every ``stride``-th estimation row was summed (1: all).
+    """
+
+    candidates: tuple[Candidate, ...]
+    chosen: Candidate
+    best: Candidate
+    linear: Candidate
+    n_estimation: int
+    n_validation: int
+    stride: int
+
+    @property
+    def nonlinear_helps(self) -> bool:
+        """Whether a nonlinear model beat every linear one by more than a standard error."""
+        return not self.chosen.linear
+
+    @property
+    def improvement(self) -> tuple[float, float]:
+        """``(linear.validation_mse - chosen.validation_mse, its standard error)``."""
+        diff = self.linear.validation_mse - self.chosen.validation_mse
+        return diff, _standard_error(self.linear, self.chosen)
+
+    def summary(self) -> dict[str, object]:
+        """Plain values: the choice, the rule and every candidate."""
+        diff, se = self.improvement
+        return {
+            "rule": "one standard error (batch means) on the held-out free-run MSE",
+            "n_estimation": self.n_estimation,
+            "n_validation": self.n_validation,
+            "chosen": self.chosen.summary(),
+            "best": self.best.summary(),
+            "linear": self.linear.summary(),
+            "nonlinear_helps": self.nonlinear_helps,
+            "improvement_over_linear": diff if math.isfinite(diff) else None,
+            "improvement_standard_error": se if math.isfinite(se) else None,
+            "candidates": [c.summary() for c in self.candidates],
+        }
+
+
+class _Search:
+    """Candidates evaluated once each, on one estimation/validation split."""
+
+    def __init__(self, u: F64, y: F64, stop: int, max_rows: int) -> None:
+        self.u, self.y, self.stop = u, y, stop
+        self.u_sorted = np.sort(u[:stop])
+        self.distinct = int(np.count_nonzero(np.diff(self.u_sorted))) + 1
+        self.stride = max(1, math.ceil(stop / max_rows))
+        self.done: dict[tuple[int, int], Candidate] = {}
+        self.order: list[Candidate] = []
+        self.located: dict[int, Located] = {}
+        self.start = max(0, stop - BURN_IN)
+
+    def feasible(self, order: int, k: int) -> bool:
+        rows = (self.stop - order) / self.stride
+        return k <= self.distinct and n_params(order, k) * ROWS_PER_PARAMETER <= rows
+
+    def __call__(self, order: int, k: int) -> Candidate | None:
+        if (order, k) in self.done:
+            return self.done[(order, k)]
+        if not self.feasible(order, k):
+            return None
+        if k not in self.located:
+            self.located[k] = Located.of(self.u, self.u_sorted, k)
+        where = self.located[k]
+        fit = fit_structure(
+            self.u,
+            self.y,
+            order,
+            k,
+            stop=self.stop,
+            stride=self.stride,
+            instruments=False,
+            located=where,
+        )
+        batches = np.full(BATCHES, np.inf)
+        if fit is not None:
+            seg, pos = where.segment[self.start :], where.position[self.start :]
+            y_hat = fit.simulate_located(seg, pos)[self.stop - self.start :]
+            err = (self.y[self.stop :] - y_hat) ** 2
+            parts = np.array_split(err, min(BATCHES, err.shape[0]))
+            batches = np.array([float(np.mean(p)) for p in parts])
+        mse = float(np.mean(batches)) if fit is not None else math.inf
+        if fit is not None and not math.isfinite(mse):
+            fit, mse = None, math.inf
+        cand = Candidate(
+            order,
+            fit.n_knots if fit is not None else k,
+            n_params(order, fit.n_knots if fit is not None else k),
+            mse,
+            fit.estimator if fit is not None else "unstable",
+            batches,
+            fit,
+        )
+        self.done[(order, k)] = cand
+        self.order.append(cand)
+        return cand
+
+    def scan_orders(self, k: int, orders: list[int], patience: int | None) -> int | None:
+        """Evaluate ``orders`` at ``k`` knots; the best order (None if none worked)."""
+        best: Candidate | None = None
+        since = 0
+        for order in orders:
+            c = self(order, k)
+            if c is None or not math.isfinite(c.validation_mse):
+                since += 1
+            elif best is None or c.validation_mse < best.validation_mse:
+                best, since = c, 0
+            else:
+                since += 1
+            if patience is not None and best is not None and since > patience:
+                break
+        return None if best is None else best.order
+
+    def scan_knots(self, order: int, grid: list[int]) -> int | None:
+        best: Candidate | None = None
+        for k in grid:
+            c = self(order, k)
+            if c is None or not math.isfinite(c.validation_mse):
+                continue
+            if best is None or c.validation_mse < best.validation_mse:
+                best = c
+        return None if best is None else best.n_knots
+
+
+def select_structure(
+    u: F64,
+    y: F64,
+    *,
+    max_order: int,
+    order: int | None = None,
+    n_knots: int | None = None,
+    validation_fraction: float = 0.25,
+    max_rows: int = MAX_ROWS,
+) -> Selection | None:
+    """Try structures on an estimation/validation split and choose one (module docstring).
+
+    Parameters
+    ----------
+    u, y : ndarray, shape (n,)
+        Input and output, finite.
+    max_order : int
+        Largest order ``l`` tried (when ``order`` is None).
+    order : int, optional
+        A fixed order (only the knots are chosen).
+    n_knots : int, optional
+        A fixed knot count (only the order is chosen); the linear baseline is
+        still chosen among ``K = 2``.
+    validation_fraction : float
+        Trailing fraction of the record held out.
+    max_rows : int
+        Estimation rows summed per candidate at most.
+
+    Returns
+    -------
+    Selection or None
+        None if no candidate gave a stable model.
+    """
+    n = u.shape[0]
+    stop = n - max(1, round(validation_fraction * n))
+    search = _Search(u, y, stop, max_rows)
+    orders = [order] if order is not None else list(range(1, max_order + 1))
+    search.scan_orders(2, orders, None)
+    if n_knots is not None:
+        search.scan_orders(n_knots, orders, PATIENCE if order is None else None)
+    elif search.distinct > 2:
+        grid = [k for k in KNOT_GRID if 2 < k <= search.distinct]
+        k_now: int | None = max([k for k in grid if k <= START_KNOTS] or grid[:1])
+        seen: set[tuple[int, int]] = set()
+        for _ in range(ROUNDS):  # coordinate search: orders at k_now, knots at that order
+            assert k_now is not None
+            best_order = search.scan_orders(k_now, orders, PATIENCE if order is None else None)
+            if best_order is None or (best_order, k_now) in seen:
+                break
+            seen.add((best_order, k_now))
+            k_now = search.scan_knots(best_order, grid)
+            if k_now is None:
+                break
+    good = [c for c in search.order if math.isfinite(c.validation_mse)]
+    linear = [c for c in good if c.linear]
+    if not good or not linear:
+        return None
+    chosen, best = _one_se(good)
+    lin, _ = _one_se(linear)
+    return Selection(tuple(search.order), chosen, best, lin, stop, n - stop, search.stride)
+
+
+def final_fit(u: F64, y: F64, cand: Candidate) -> StructureFit:
+    """The candidate's structure fitted to the whole record (instrumental variables tried).
+
+    Falls back to the candidate's own fit on the estimation part if the whole
+    record gives no stable model.
+    """
+    fit = fit_structure(u, y, cand.order, cand.n_knots)
+    if fit is None:
+        assert cand.fit is not None  # a chosen candidate always has a stable fit
+        return cand.fit
+    return fit
