@@ -12,7 +12,9 @@ of them is redundant beside the centring). Column of ``y_{n-i}``: ``i - 1``;
 column of ``g_k(u_{n-j})``: ``p + j (K - 1) + k'`` with ``k' = k - [k > r]``.
 At most two hats are non-zero per lag, so a row has ``p + 2 (q + 1)``
 non-zero entries and the sums below cost that number squared per row,
-whatever ``K``. Rows run from ``start`` to ``stop`` by ``stride``.
+whatever ``K``. The rows are those of the ``segments`` ``[a, b)`` (an array of
+shape ``(m, 2)``) whose lags stay inside the segment, from ``a + max(p, q)``
+to ``b`` by ``stride``.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["arma_predict", "hammerstein_gram", "instrument_cross"]
+__all__ = ["arma_predict", "hammerstein_gram", "instrument_cross", "locate_sorted"]
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -61,14 +63,14 @@ def hammerstein_gram(
     q: int,
     k: int,
     ref: int,
-    start: int,
-    stop: int,
+    segments: I64,
     stride: int,
     gram: F64,
     sums: F64,
     cross: F64,
 ) -> tuple[int, float]:  # pragma: no cover - compiled
-    """Add ``sum phi phi^T`` to ``gram``, ``sum phi`` to ``sums``, ``sum phi y_n`` to ``cross``.
+    """Add ``sum phi phi^T`` to ``gram`` (its upper triangle only: a row's columns
+    come in increasing order), ``sum phi`` to ``sums``, ``sum phi y_n`` to ``cross``.
 
     Returns the number of rows and ``sum y_n`` over them.
     """
@@ -76,18 +78,20 @@ def hammerstein_gram(
     vals = np.empty(p + 2 * (q + 1))
     count = 0
     total = 0.0
-    for n in range(start, stop, stride):
-        m = _row(y, seg, pos, p, q, k, ref, n, cols, vals)
-        target = y[n]
-        for a in range(m):
-            ca = cols[a]
-            va = vals[a]
-            sums[ca] += va
-            cross[ca] += va * target
-            for b in range(m):
-                gram[ca, cols[b]] += va * vals[b]
-        count += 1
-        total += target
+    lag = max(p, q)
+    for g in range(segments.shape[0]):
+        for n in range(segments[g, 0] + lag, segments[g, 1], stride):
+            m = _row(y, seg, pos, p, q, k, ref, n, cols, vals)
+            target = y[n]
+            for a in range(m):
+                ca = cols[a]
+                va = vals[a]
+                sums[ca] += va
+                cross[ca] += va * target
+                for b in range(a, m):
+                    gram[ca, cols[b]] += va * vals[b]
+            count += 1
+            total += target
     return count, total
 
 
@@ -101,8 +105,7 @@ def instrument_cross(
     q: int,
     k: int,
     ref: int,
-    start: int,
-    stop: int,
+    segments: I64,
     stride: int,
     block: F64,
     sums: F64,
@@ -112,15 +115,17 @@ def instrument_cross(
     ``sum x_{n-i}`` into ``sums`` and ``sum x_{n-i} y_n`` into ``cross`` (``i = 1..p``)."""
     cols = np.empty(p + 2 * (q + 1), np.int64)
     vals = np.empty(p + 2 * (q + 1))
-    for n in range(start, stop, stride):
-        m = _row(y, seg, pos, p, q, k, ref, n, cols, vals)
-        target = y[n]
-        for i in range(1, p + 1):
-            z = x[n - i]
-            sums[i - 1] += z
-            cross[i - 1] += z * target
-            for b in range(m):
-                block[i - 1, cols[b]] += z * vals[b]
+    lag = max(p, q)
+    for g in range(segments.shape[0]):
+        for n in range(segments[g, 0] + lag, segments[g, 1], stride):
+            m = _row(y, seg, pos, p, q, k, ref, n, cols, vals)
+            target = y[n]
+            for i in range(1, p + 1):
+                z = x[n - i]
+                sums[i - 1] += z
+                cross[i - 1] += z * target
+                for b in range(m):
+                    block[i - 1, cols[b]] += z * vals[b]
 
 
 @nb.njit(cache=True)
@@ -162,3 +167,21 @@ def arma_predict(
                     acc += b[j] * w[s - j]
             tmp[s - lo] = acc
         out[n] = tmp[n - lo]
+
+
+@nb.njit(cache=True)
+def locate_sorted(u: F64, knots: F64, seg: I64, pos: F64) -> None:  # pragma: no cover - compiled
+    """:func:`flexarm.ident.hatbasis.locate` by bisection, one pass, into ``seg`` and ``pos``."""
+    k = knots.shape[0]
+    for n in range(u.shape[0]):
+        x = u[n]
+        lo, hi = 0, k - 2
+        while lo < hi:  # the last segment i with knots[i] <= x (0 if x < knots[0])
+            mid = (lo + hi + 1) // 2
+            if knots[mid] <= x:
+                lo = mid
+            else:
+                hi = mid - 1
+        left = knots[lo]
+        seg[n] = lo
+        pos[n] = (x - left) / (knots[lo + 1] - left)

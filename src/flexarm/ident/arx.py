@@ -29,7 +29,8 @@ Estimation, for a given order ``l`` and knot count ``K``
    squares is biased. The instruments replace the lagged outputs by the
    noise-free simulated output of the current model; the system is solved
    again and separated again. A step is **kept only if it lowers the
-   free-run (output-error) mean square error** on the estimation samples —
+   free-run (output-error) mean square error** on the estimation samples (with
+   the output offset that fits the free run best) —
    the output-error criterion, which the true system minimises whatever the
    noise colour. On data that do not follow the paper's noise model
    (the DaISy arm) the instruments can lose, and least squares is kept.
@@ -57,7 +58,7 @@ from ._arx_loops import hammerstein_gram, instrument_cross
 from .hatbasis import evaluate, locate, quantile_knots
 from .systems import spectral_radius
 
-__all__ = ["Located", "StructureFit", "fit_structure", "n_params"]
+__all__ = ["Design", "Located", "StructureFit", "fit_structure", "n_params"]
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -84,12 +85,15 @@ class StructureFit:
     knots : ndarray, shape (K,)
         Knots (units of ``u``).
     phi : ndarray, shape (K,)
-        Values of the nonlinearity at the knots, mean zero over the estimation
-        inputs (scale and sign set by the separation).
+        Values of the nonlinearity at the knots, mean zero over the inputs of
+        the regression rows (scale and sign set by the separation).
     a, b : ndarray, shapes (l,) and (l + 1,)
         The linear part in the paper's ARMA convention.
-    y_mean : float
-        Mean output of the estimation samples (units of ``y``).
+    offset : float
+        Output offset (units of ``y``): the mean, over the estimation samples,
+        of the output minus the model's free run from rest — the constant that
+        best fits the free run (no division by ``A(1)``, which is near zero
+        for a lightly damped system).
     singular_values : ndarray, shape (min(l + 1, K - 1),)
         Of the array ``theta_jk = b_j c_k`` (rank one for a Hammerstein system).
     estimator : str
@@ -97,8 +101,8 @@ class StructureFit:
     iv_steps : int
         Instrumental-variable steps kept.
     output_mse : float
-        Free-run mean square error on the estimation samples (units of ``y``
-        squared).
+        Free-run mean square error on the estimation samples, offset included
+        (units of ``y`` squared).
     history : tuple of float
         ``output_mse`` after least squares and after each step tried.
     """
@@ -108,7 +112,7 @@ class StructureFit:
     phi: F64
     a: F64
     b: F64
-    y_mean: float
+    offset: float
     singular_values: F64
     estimator: str
     iv_steps: int
@@ -139,7 +143,45 @@ class StructureFit:
 
         w = evaluate(segment, position, self.phi)
         out: F64 = np.asarray(lfilter(self.b, np.r_[1.0, -self.a], w), dtype=np.float64)
-        return out + self.y_mean
+        return out + self.offset
+
+
+@dataclass(frozen=True)
+class Design:
+    """Which samples of a record estimate, and how its free run is simulated.
+
+    Attributes
+    ----------
+    segments : ndarray of int64, shape (m, 2)
+        Estimation segments ``[a, b)``: the regression rows (whose lags stay in
+        a segment), the knots and the means come from them.
+    runs : ndarray of int64, shape (r, 2)
+        Free runs ``[s0, e)``, each simulated from rest (a run's first samples
+        are its burn-in); they cover the estimation samples.
+    mask : ndarray of bool, shape (n,)
+        The estimation samples scored by the output error.
+    """
+
+    segments: I64
+    runs: I64
+    mask: NDArray[np.bool_]
+
+    @classmethod
+    def whole(cls, n: int) -> Design:
+        """Every sample of an ``n``-sample record, one free run."""
+        full = np.array([[0, n]], dtype=np.int64)
+        return cls(full, full, np.ones(n, dtype=bool))
+
+    def free_run(self, b: F64, a: F64, seg: I64, pos: F64, phi: F64) -> F64:
+        """``B/A phi(u)`` from rest over each run, shape (n,) (zero outside the runs)."""
+        from scipy.signal import lfilter
+
+        out = np.zeros(self.mask.shape[0])
+        den = np.r_[1.0, -a]
+        for s0, e in self.runs:
+            w = evaluate(seg[s0:e], pos[s0:e], phi)
+            out[s0:e] = lfilter(b, den, w)
+        return out
 
 
 @dataclass
@@ -147,12 +189,13 @@ class _Problem:
     """The regression of one structure on one record (sums shared by LS and IV)."""
 
     yc: F64
+    y_mean: float
     seg: I64
     pos: F64
     order: int
     knots: F64
     ref: int
-    stop: int
+    design: Design
     stride: int
     gram: F64
     rhs: F64
@@ -175,17 +218,23 @@ class _Problem:
             return None
         b = left[:, 0] * s[0]
         c = np.insert(right[0], self.ref, 0.0)
-        phi = c - float(np.mean(evaluate(self.seg[: self.stop], self.pos[: self.stop], c)))
+        # mean of phi over the rows' inputs, from the column sums of lag 0
+        mean = float(right[0] @ self.sums[order : order + k - 1]) / self.count
+        phi = c - mean
         a = np.ascontiguousarray(theta[:order])
         return a, np.ascontiguousarray(b), phi, s
 
     def output(self, a: F64, b: F64, phi: F64) -> F64:
-        """Free-run deviation output ``y_hat - y_mean`` over the estimation samples."""
-        from scipy.signal import lfilter
+        """Free-run output from rest, without offset, over the design's runs."""
+        return self.design.free_run(b, a, self.seg, self.pos, phi)
 
-        w = evaluate(self.seg[: self.stop], self.pos[: self.stop], phi)
-        out: F64 = np.asarray(lfilter(b, np.r_[1.0, -a], w), dtype=np.float64)
-        return out
+    def output_fit(self, a: F64, b: F64, phi: F64) -> tuple[float, float]:
+        """``(offset, mse)``: the best output offset of the free run and its mean
+        square error over the estimation samples (offset relative to the centring)."""
+        mask = self.design.mask
+        err = (self.yc - self.output(a, b, phi))[mask]
+        offset = float(np.mean(err))
+        return offset, float(np.mean((err - offset) ** 2))
 
     def instrumental(self, x: F64) -> F64 | None:
         """The IV solution with the simulated deviation output ``x`` as instrument."""
@@ -196,7 +245,7 @@ class _Problem:
         zc = np.zeros(p)
         instrument_cross(
             x, self.yc, self.seg, self.pos, p, p, self.k, self.ref,
-            p, self.stop, self.stride, block, zs, zc,
+            self.design.segments, self.stride, block, zs, zc,
         )  # fmt: skip
         mat = np.vstack([block - np.outer(zs, self.sums) / self.count, self.gram[p:]])
         rhs = np.r_[zc - zs * self.total / self.count, self.rhs[p:]]
@@ -243,22 +292,25 @@ class Located:
         return cls(knots, *locate(u, knots))
 
 
-def _problem(y: F64, order: int, where: Located, stop: int, stride: int) -> _Problem:
+def _problem(y: F64, order: int, where: Located, design: Design, stride: int) -> _Problem:
     k = where.knots.shape[0]
     seg, pos = where.segment, where.position
     ref = k // 2
-    yc = y - float(np.mean(y[:stop]))
+    y_mean = float(np.mean(y[design.mask]))
+    yc = y - y_mean
     d = n_params(order, k)
     gram = np.zeros((d, d))
     sums = np.zeros(d)
     cross = np.zeros(d)
     count, total = hammerstein_gram(
-        yc, seg, pos, order, order, k, ref, order, stop, stride, gram, sums, cross
+        yc, seg, pos, order, order, k, ref, design.segments, stride, gram, sums, cross
     )
+    gram += np.triu(gram, 1).T  # the loop fills the upper triangle
     gram -= np.outer(sums, sums) / count
     rhs = cross - sums * total / count
+    knots = where.knots
     return _Problem(
-        yc, seg, pos, order, where.knots, ref, stop, stride, gram, rhs, sums, total, count
+        yc, y_mean, seg, pos, order, knots, ref, design, stride, gram, rhs, sums, total, count
     )
 
 
@@ -268,9 +320,9 @@ def fit_structure(
     order: int,
     n_knots: int,
     *,
-    stop: int | None = None,
+    design: Design | None = None,
     stride: int = 1,
-    instruments: bool = True,
+    instruments: int = MAX_IV_STEPS,
     located: Located | None = None,
 ) -> StructureFit | None:
     """Fit the ARX-Hammerstein model of order ``order`` with ``n_knots`` knots.
@@ -282,15 +334,15 @@ def fit_structure(
     order : int
         ``l >= 1``.
     n_knots : int
-        ``K >= 2`` knots at the quantiles of ``u[:stop]`` (2: a linear model).
-    stop : int, optional
-        Estimate from the samples ``[0, stop)`` (default all); the knots, the
-        means and the output-error check use these samples only.
+        ``K >= 2`` knots at the quantiles of the estimation inputs (2: a linear model).
+    design : Design, optional
+        Which samples estimate and how the free run is simulated (default the
+        whole record, :meth:`Design.whole`).
     stride : int
         Use every ``stride``-th regression row in the sums (the output-error
         check uses every sample).
-    instruments : bool
-        Try the instrumental-variable steps after least squares.
+    instruments : int
+        Instrumental-variable steps tried after least squares (0: none).
     located : Located, optional
         The knots and located inputs, when already known (``n_knots`` is then ignored).
 
@@ -299,21 +351,21 @@ def fit_structure(
     StructureFit or None
         None when no stable model comes out (the structure is then unusable).
     """
-    n = u.shape[0]
-    stop = n if stop is None else stop
-    where = Located.of(u, np.sort(u[:stop]), n_knots) if located is None else located
-    prob = _problem(y, order, where, stop, stride)
+    design = Design.whole(u.shape[0]) if design is None else design
+    if located is None:
+        located = Located.of(u, np.sort(u[design.mask]), n_knots)
+    prob = _problem(y, order, located, design, stride)
     theta = _solve(prob.gram, prob.rhs, symmetric=True)
     parts = None if theta is None else prob.separate(theta)
     best: tuple[F64, F64, F64, F64] | None = None
-    best_mse = np.inf
+    best_mse, best_offset = np.inf, 0.0
     if parts is not None and spectral_radius(parts[0]) < 1.0:
         best = parts
-        best_mse = float(np.mean((prob.yc[:stop] - prob.output(*parts[:3])) ** 2))
+        best_offset, best_mse = prob.output_fit(*parts[:3])
     history = [best_mse]
     steps = 0
     current = parts
-    for _ in range(MAX_IV_STEPS if instruments else 0):
+    for _ in range(instruments):
         if current is None or not spectral_radius(current[0]) < 1.0:
             break
         theta = prob.instrumental(prob.output(*current[:3]))
@@ -321,12 +373,12 @@ def fit_structure(
         if current is None or not spectral_radius(current[0]) < 1.0:
             history.append(np.inf)
             break
-        mse = float(np.mean((prob.yc[:stop] - prob.output(*current[:3])) ** 2))
+        offset, mse = prob.output_fit(*current[:3])
         history.append(mse)
         if not mse < best_mse:
             break
         converged = mse > best_mse * (1.0 - IV_TOLERANCE)
-        best, best_mse, steps = current, mse, steps + 1
+        best, best_mse, best_offset, steps = current, mse, offset, steps + 1
         if converged:
             break
     if best is None:
@@ -338,7 +390,7 @@ def fit_structure(
         phi=phi,
         a=a,
         b=b,
-        y_mean=float(np.mean(y[:stop])),
+        offset=prob.y_mean + best_offset,
         singular_values=s,
         estimator="instrumental variables" if steps else "least squares",
         iv_steps=steps,

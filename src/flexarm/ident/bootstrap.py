@@ -164,7 +164,7 @@ def _replicate(est: Any, u: F64, y: F64) -> tuple[F64, F64, F64] | None:
         return None
     try:
         sol = normalise(
-            fit, u, n_lags=p["n_lags"], known_points=p["known_points"], criterion={}, owner=""
+            fit, u, y, n_lags=p["n_lags"], known_points=p["known_points"], criterion={}, owner=""
         )
     except InvalidValueError:
         return None

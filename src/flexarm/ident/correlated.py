@@ -72,6 +72,7 @@ def _input_weights(u: F64, knots: F64) -> F64:
 def normalise(
     fit: StructureFit,
     u: F64,
+    y: F64,
     *,
     n_lags: int,
     known_points: KnownPoints | None,
@@ -103,8 +104,9 @@ def normalise(
         d1, alpha = two_point_normalisation(float(s1), float(s2), f1, f2)
         phi, b = (shape - alpha) / d1, fit.b * d1
     model = ARMA(tuple(fit.a.tolist()), tuple(b.tolist()))
-    mean_phi = float(np.mean(evaluate(*locate(u, fit.knots), phi)))
-    offset = fit.y_mean - model.dc_gain * mean_phi if known_points is not None else fit.y_mean
+    offset = fit.offset
+    if known_points is not None:  # phi moved: the offset that fits the free run best again
+        offset = float(np.mean(y - model.filter(evaluate(*locate(u, fit.knots), phi))))
     return Solution(
         lags=lags,
         shape=shape.copy(),
@@ -167,6 +169,6 @@ def solve_correlated(
         c.order: c.validation_mse for c in sel.candidates if c.n_knots == sel.chosen.n_knots
     }
     sol = normalise(
-        fit, u, n_lags=n_lags, known_points=known_points, criterion=criterion, owner=owner
+        fit, u, y, n_lags=n_lags, known_points=known_points, criterion=criterion, owner=owner
     )
     return CorrelatedResult(sol, fit, sel)

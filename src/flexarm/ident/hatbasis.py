@@ -79,10 +79,11 @@ def locate(u: F64, knots: F64) -> tuple[I64, F64]:
     position : ndarray, shape (n,)
         ``w = (u - t_i) / (t_{i+1} - t_i)``; outside ``[0, 1]`` beyond the end knots.
     """
-    k = knots.shape[0]
-    seg = np.clip(np.searchsorted(knots, u, side="right") - 1, 0, k - 2).astype(np.int64)
-    left = knots[seg]
-    pos: F64 = (u - left) / (knots[seg + 1] - left)
+    from ._arx_loops import locate_sorted
+
+    seg = np.empty(u.shape[0], dtype=np.int64)
+    pos = np.empty(u.shape[0])
+    locate_sorted(np.ascontiguousarray(u, dtype=np.float64), knots, seg, pos)
     return seg, pos
 
 

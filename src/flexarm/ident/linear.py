@@ -48,9 +48,9 @@ class LinearModel:
     arma : ARMA
         From ``u - input_mean`` to ``y - offset``.
     offset : float
-        Mean output of the data (units of ``y``).
+        Output offset (units of ``y``): the constant that fits the free run best.
     input_mean : float
-        Mean input of the data (units of ``u``).
+        Input level of zero response (units of ``u``): about the data's mean.
     order : int
         ``l``.
     estimator : str
@@ -68,13 +68,14 @@ class LinearModel:
         return self.arma.filter(u - self.input_mean) + self.offset
 
 
-def linear_model(fit: StructureFit, u: F64) -> LinearModel:
-    """The two-knot structure ``fit`` as a linear model of ``u`` (the data it was fitted on)."""
+def linear_model(fit: StructureFit) -> LinearModel:
+    """The two-knot structure ``fit`` as a linear model of ``u`` (the same free run)."""
     t0, t1 = float(fit.knots[0]), float(fit.knots[1])
     slope = float(fit.phi[1] - fit.phi[0]) / (t1 - t0)
-    # phi(u) = phi0 + slope (u - t0) has mean zero over the data: phi(u) = slope (u - mean u)
+    # phi(u) = phi0 + slope (u - t0) = slope (u - centre): the same free run
     arma = ARMA(tuple(fit.a.tolist()), tuple((slope * fit.b).tolist()))
-    return LinearModel(arma, fit.y_mean, float(np.mean(u)), fit.order, fit.estimator)
+    centre = t0 - float(fit.phi[0]) / slope
+    return LinearModel(arma, fit.offset, centre, fit.order, fit.estimator)
 
 
 class LinearARX(HyperParameters):
@@ -100,7 +101,8 @@ class LinearARX(HyperParameters):
     arma_ : ARMA
         From ``u - input_mean_`` to ``y - offset_``.
     offset_, input_mean_ : float
-        Output and input means (units of ``y`` and ``u``).
+        Output offset and input level (units of ``y`` and ``u``):
+        ``y_hat = offset_ + B/A (u - input_mean_)``.
     impulse_response_ : ndarray, shape (n_lags,)
         ``arma_``'s impulse response (units of ``y`` per unit of ``u``).
     estimator_ : str
@@ -174,7 +176,7 @@ class LinearARX(HyperParameters):
 
     def _fit(self, u: F64, y: F64, sel: Selection, n_lags: int) -> None:
         """Refit the selection's linear choice to the whole record (shared with the identifier)."""
-        self.model_ = linear_model(final_fit(u, y, sel.linear), u)
+        self.model_ = linear_model(final_fit(u, y, sel.linear))
         self.selection_ = sel
         self.n_samples_ = int(u.shape[0])
         self._n_lags = n_lags
@@ -199,12 +201,12 @@ class LinearARX(HyperParameters):
 
     @property
     def offset_(self) -> float:
-        """Mean output of the record (units of ``y``)."""
+        """Output offset (units of ``y``)."""
         return self._check_fitted().offset
 
     @property
     def input_mean_(self) -> float:
-        """Mean input of the record (units of ``u``)."""
+        """Input level of zero response (units of ``u``)."""
         return self._check_fitted().input_mean
 
     @property

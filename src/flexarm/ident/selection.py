@@ -1,18 +1,25 @@
 r"""Choosing the order and the knots of an ARX-Hammerstein model from held-out data.
 
-The record is split in time: the first ``1 - validation_fraction`` estimates
-every candidate structure (:func:`flexarm.ident.arx.fit_structure`), the rest
-validates it by its **free-run** mean square error (the model simulated from
-rest over the whole record, scored on the held-out samples). A free-run
-error punishes a surplus of poles and zeros that a one-step or
-impulse-response criterion such as BIC on a noisy impulse response lets
+The record is cut into :data:`VALIDATION_BLOCKS` ``* p`` contiguous blocks,
+``p = round(1 / validation_fraction)``; every ``p``-th block is held out (blocked
+cross-validation: Racine 2000; Bergmeir & Benítez 2012). The other blocks
+estimate every candidate structure (:func:`flexarm.ident.arx.fit_structure`:
+the knots, the means and the regression rows come from them only), and the
+held-out blocks validate it by its **free-run** mean square error: the model is
+simulated from rest over the whole record (the inputs are known everywhere;
+no held-out output enters) and scored on the held-out samples. Interleaving
+the blocks keeps both parts alike for a non-stationary input — the last
+quarter of a sine sweep holds frequencies the first three quarters never
+excite. A free-run error punishes a surplus of poles and zeros that a one-step
+or impulse-response criterion such as BIC on a noisy impulse response lets
 through.
 
 Candidates
 ----------
 Orders ``l = 1 .. max_order`` and knot counts on a geometric grid
 (:data:`KNOT_GRID`, ``K = 2`` being the linear model), with at least
-:data:`ROWS_PER_PARAMETER` estimation rows per parameter. The linear models
+:data:`ROWS_PER_PARAMETER` estimation rows per parameter and at most
+:data:`MAX_PARAMS` parameters (the cost of a solution grows as their cube). The linear models
 (``K = 2``) are tried at every order: they are the baseline. The nonlinear
 ones are searched by coordinates: the orders at :data:`START_KNOTS` knots,
 then the knots at the best order, then the orders at the best knots, and so
@@ -28,10 +35,26 @@ of the difference of two candidates' errors is taken from :data:`BATCHES`
 contiguous batch means of the validation part, which allows for the errors'
 serial correlation. The same rule restricted to ``K = 2`` chooses the linear
 baseline; the nonlinear part **helps** only if the chosen model is nonlinear,
-i.e. it beats every linear model by more than a standard error.
+i.e. it beats every linear model by more than a standard error — otherwise the
+structure chosen is the baseline's.
 
-With more than :data:`MAX_ROWS` estimation rows the sums of the candidates
-use every ``s``-th row (a systematic subsample); the final fit uses all rows.
+A record longer than :data:`SELECTION_SAMPLES` samples chooses its structure
+on an excerpt: the blocks become windows of ``SELECTION_SAMPLES / (5 p)``
+samples spread evenly over the record, each simulated from rest over the
+:data:`BURN_IN` samples before it (which are not scored). With more than
+:data:`MAX_ROWS` estimation rows the sums use every ``s``-th row (a systematic
+subsample). The chosen structure is then fitted to the whole record.
+
+References
+----------
+* L. Breiman, J. H. Friedman, R. A. Olshen, C. J. Stone, *Classification and
+  Regression Trees*, Wadsworth (1984).
+* T. Hastie, R. Tibshirani, J. Friedman, *The Elements of Statistical
+  Learning*, 2nd ed., Springer (2009).
+* J. Racine, "Consistent cross-validatory model-selection for dependent data:
+  hv-block cross-validation", J. Econometrics 99 (2000) 39–61.
+* C. Bergmeir, J. M. Benítez, "On the use of cross-validation for time series
+  predictor evaluation", Information Sciences 191 (2012) 192–213.
 """
 
 from __future__ import annotations
@@ -42,24 +65,29 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from .arx import Located, StructureFit, fit_structure, n_params
+from .arx import Design, Located, StructureFit, fit_structure, n_params
 
 __all__ = [
     "BATCHES",
     "BURN_IN",
     "KNOT_GRID",
+    "MAX_PARAMS",
     "MAX_ROWS",
     "PATIENCE",
     "ROUNDS",
     "ROWS_PER_PARAMETER",
+    "SELECTION_SAMPLES",
     "START_KNOTS",
+    "VALIDATION_BLOCKS",
     "Candidate",
     "Selection",
+    "design",
     "final_fit",
     "select_structure",
 ]
 
 F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
 
 #: Knot counts tried (2: linear).
 KNOT_GRID: tuple[int, ...] = (2, 3, 4, 6, 8, 11, 16, 23, 32, 45, 64, 91, 128)
@@ -67,6 +95,8 @@ KNOT_GRID: tuple[int, ...] = (2, 3, 4, 6, 8, 11, 16, 23, 32, 45, 64, 91, 128)
 START_KNOTS = 8
 #: Estimation rows required per parameter of the over-parameterised regression.
 ROWS_PER_PARAMETER = 10
+#: Parameters of the over-parameterised regression at most (its solution costs their cube).
+MAX_PARAMS = 600
 #: Orders scanned past the best one before an order scan stops.
 PATIENCE = 2
 #: Rounds of the coordinate search (orders, then knots) at most.
@@ -74,9 +104,15 @@ ROUNDS = 3
 #: Batches of the validation part for the standard errors.
 BATCHES = 20
 #: Estimation rows summed per candidate at most (a systematic subsample beyond).
-MAX_ROWS = 2**16
-#: A candidate's free run starts this many samples before the validation part (from rest).
-BURN_IN = 2**14
+MAX_ROWS = 2**15
+#: Instrumental-variable steps tried per candidate (the final fit tries more).
+SELECTION_IV_STEPS = 1
+#: Held-out blocks (every ``p``-th of ``VALIDATION_BLOCKS * p`` blocks).
+VALIDATION_BLOCKS = 5
+#: Records longer than this choose their structure on an excerpt of this many samples.
+SELECTION_SAMPLES = 2**16
+#: Samples simulated before each window of the excerpt (from rest), not scored.
+BURN_IN = 2**12
 
 
 @dataclass(frozen=True)
@@ -155,7 +191,7 @@ class Selection:
     linear : Candidate
         The linear baseline's structure (the same rule among ``K = 2``).
     n_estimation, n_validation : int
-        Samples of the two parts.
+        Samples of the two parts (interleaved blocks).
     stride : int
         Every ``stride``-th estimation row was summed (1: all).
     """
@@ -183,7 +219,7 @@ class Selection:
         """Plain values: the choice, the rule and every candidate."""
         diff, se = self.improvement
         return {
-            "rule": "one standard error (batch means) on the held-out free-run MSE",
+            "rule": "one standard error (batch means) on the free-run MSE of held-out blocks",
             "n_estimation": self.n_estimation,
             "n_validation": self.n_validation,
             "chosen": self.chosen.summary(),
@@ -196,22 +232,63 @@ class Selection:
         }
 
 
+def design(n: int, validation_fraction: float) -> tuple[Design, NDArray[np.bool_], I64]:
+    """The split of an ``n``-sample record, or of its excerpt (module docstring).
+
+    Returns the estimation :class:`~flexarm.ident.arx.Design`, the held-out mask
+    and the indices of the record's samples in the (excerpt) record, shape (n_sub,).
+    """
+    period = max(2, round(1.0 / validation_fraction))
+    n_blocks = VALIDATION_BLOCKS * period
+    if n <= SELECTION_SAMPLES:
+        index = np.arange(n, dtype=np.int64)
+        edges = np.linspace(0, n, n_blocks + 1).round().astype(np.int64)
+        starts, stops, burn = edges[:-1], edges[1:], np.zeros(n_blocks, dtype=np.int64)
+        runs = np.array([[0, n]], dtype=np.int64)
+    else:  # evenly spaced windows, each simulated from rest after its burn-in
+        length = SELECTION_SAMPLES // n_blocks
+        where = BURN_IN + np.linspace(0, n - length - BURN_IN, n_blocks).round().astype(np.int64)
+        index = np.concatenate([np.arange(c - BURN_IN, c + length) for c in where])
+        offsets = np.arange(n_blocks, dtype=np.int64) * (BURN_IN + length)
+        starts, stops = offsets + BURN_IN, offsets + BURN_IN + length
+        burn = np.full(n_blocks, BURN_IN, dtype=np.int64)
+        runs = np.column_stack([offsets, stops]).astype(np.int64)
+    n_sub = index.shape[0]
+    held = np.zeros(n_sub, dtype=bool)
+    mask = np.zeros(n_sub, dtype=bool)
+    segments: list[list[int]] = []
+    for i in range(n_blocks):
+        a, b = int(starts[i]), int(stops[i])
+        if i % period == period - 1:
+            held[a:b] = True
+            continue
+        mask[a:b] = True
+        if segments and segments[-1][1] == a and burn[i] == 0:
+            segments[-1][1] = b
+        else:
+            segments.append([a, b])
+    return Design(np.array(segments, dtype=np.int64), runs, mask), held, index
+
+
 class _Search:
     """Candidates evaluated once each, on one estimation/validation split."""
 
-    def __init__(self, u: F64, y: F64, stop: int, max_rows: int) -> None:
-        self.u, self.y, self.stop = u, y, stop
-        self.u_sorted = np.sort(u[:stop])
+    def __init__(self, u: F64, y: F64, fraction: float, max_rows: int) -> None:
+        self.design, self.held, index = design(u.shape[0], fraction)
+        self.u, self.y = u[index], y[index]
+        est = self.design.mask
+        self.u_sorted = np.sort(self.u[est])
         self.distinct = int(np.count_nonzero(np.diff(self.u_sorted))) + 1
-        self.stride = max(1, math.ceil(stop / max_rows))
+        self.rows = int(np.count_nonzero(est))
+        self.stride = max(1, math.ceil(self.rows / max_rows))
         self.done: dict[tuple[int, int], Candidate] = {}
         self.order: list[Candidate] = []
         self.located: dict[int, Located] = {}
-        self.start = max(0, stop - BURN_IN)
 
     def feasible(self, order: int, k: int) -> bool:
-        rows = (self.stop - order) / self.stride
-        return k <= self.distinct and n_params(order, k) * ROWS_PER_PARAMETER <= rows
+        rows = (self.rows - order * self.design.segments.shape[0]) / self.stride
+        d = n_params(order, k)
+        return k <= self.distinct and d * ROWS_PER_PARAMETER <= rows and d <= MAX_PARAMS
 
     def __call__(self, order: int, k: int) -> Candidate | None:
         if (order, k) in self.done:
@@ -226,16 +303,15 @@ class _Search:
             self.y,
             order,
             k,
-            stop=self.stop,
+            design=self.design,
             stride=self.stride,
-            instruments=False,
+            instruments=SELECTION_IV_STEPS,
             located=where,
         )
         batches = np.full(BATCHES, np.inf)
         if fit is not None:
-            seg, pos = where.segment[self.start :], where.position[self.start :]
-            y_hat = fit.simulate_located(seg, pos)[self.stop - self.start :]
-            err = (self.y[self.stop :] - y_hat) ** 2
+            y_hat = self.design.free_run(fit.b, fit.a, where.segment, where.position, fit.phi)
+            err = (self.y[self.held] - fit.offset - y_hat[self.held]) ** 2
             parts = np.array_split(err, min(BATCHES, err.shape[0]))
             batches = np.array([float(np.mean(p)) for p in parts])
         mse = float(np.mean(batches)) if fit is not None else math.inf
@@ -305,7 +381,7 @@ def select_structure(
         A fixed knot count (only the order is chosen); the linear baseline is
         still chosen among ``K = 2``.
     validation_fraction : float
-        Trailing fraction of the record held out.
+        Share of the record held out, as every ``round(1 / fraction)``-th block.
     max_rows : int
         Estimation rows summed per candidate at most.
 
@@ -314,9 +390,7 @@ def select_structure(
     Selection or None
         None if no candidate gave a stable model.
     """
-    n = u.shape[0]
-    stop = n - max(1, round(validation_fraction * n))
-    search = _Search(u, y, stop, max_rows)
+    search = _Search(u, y, validation_fraction, max_rows)
     orders = [order] if order is not None else list(range(1, max_order + 1))
     search.scan_orders(2, orders, None)
     if n_knots is not None:
@@ -340,7 +414,11 @@ def select_structure(
         return None
     chosen, best = _one_se(good)
     lin, _ = _one_se(linear)
-    return Selection(tuple(search.order), chosen, best, lin, stop, n - stop, search.stride)
+    if chosen.linear:  # no nonlinear model helps: the structure is the baseline's
+        chosen = lin
+    held = int(np.count_nonzero(search.held))
+    n_est = int(np.count_nonzero(search.design.mask))
+    return Selection(tuple(search.order), chosen, best, lin, n_est, held, search.stride)
 
 
 def final_fit(u: F64, y: F64, cand: Candidate) -> StructureFit:
