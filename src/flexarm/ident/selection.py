@@ -31,9 +31,15 @@ Choice: the one-standard-error rule
 Among the candidates whose validation error is within one standard error of
 the smallest, the one with the fewest parameters is chosen (Breiman et al.
 1984, §3.4.3; Hastie, Tibshirani & Friedman 2009, §7.10). The standard error
-of the difference of two candidates' errors is taken from :data:`BATCHES`
-contiguous batch means of the validation part, which allows for the errors'
-serial correlation. The same rule restricted to ``K = 2`` chooses the linear
+of the difference of two candidates' errors has two parts. The held-out part
+comes from :data:`BATCHES` contiguous batch means of the validation errors,
+which allows for their serial correlation. One split does not show how the
+fitted models themselves scatter, so the spread of their estimation excess is
+added: a model with ``d`` parameters fitted to ``N`` rows exceeds the best
+attainable error by about ``sigma**2 chi2_d / N`` (Akaike's final prediction
+error), of standard deviation ``sigma**2 sqrt(2 d) / N``; for two models,
+``sigma**2 sqrt(2 (d_1 + d_2)) / N``, with ``sigma**2`` the smallest
+validation error. The same rule restricted to ``K = 2`` chooses the linear
 baseline; the nonlinear part **helps** only if the chosen model is nonlinear,
 i.e. it beats every linear model by more than a standard error — otherwise the
 structure chosen is the baseline's.
@@ -159,19 +165,25 @@ class Candidate:
         }
 
 
-def _standard_error(c: Candidate, ref: Candidate) -> float:
-    """Batch-means standard error of ``c.validation_mse - ref.validation_mse``."""
+def _standard_error(c: Candidate, ref: Candidate, rows: float) -> float:
+    """Standard error of ``c.validation_mse - ref.validation_mse`` (module docstring).
+
+    Batch means of the held-out errors, plus the spread of the two models'
+    estimation excess, ``mse sqrt(2 (d_c + d_ref)) / rows``.
+    """
     d = c.batch_mse - ref.batch_mse
-    return float(np.std(d, ddof=1) / math.sqrt(d.shape[0])) if d.shape[0] > 1 else 0.0
+    batch = float(np.std(d, ddof=1) / math.sqrt(d.shape[0])) if d.shape[0] > 1 else 0.0
+    excess = ref.validation_mse * math.sqrt(2.0 * (c.n_params + ref.n_params)) / rows
+    return batch + excess
 
 
-def _one_se(cands: list[Candidate]) -> tuple[Candidate, Candidate]:
+def _one_se(cands: list[Candidate], rows: float) -> tuple[Candidate, Candidate]:
     """``(chosen, best)``: the fewest parameters within one standard error of the best."""
     best = min(cands, key=lambda c: (c.validation_mse, c.n_params))
     within = [
         c
         for c in cands
-        if c.validation_mse - best.validation_mse <= _standard_error(c, best) or c is best
+        if c is best or c.validation_mse - best.validation_mse <= _standard_error(c, best, rows)
     ]
     return min(within, key=lambda c: (c.n_params, c.validation_mse)), best
 
@@ -194,6 +206,8 @@ class Selection:
         Samples of the two parts (interleaved blocks).
     stride : int
         Every ``stride``-th estimation row was summed (1: all).
+    rows : float
+        Estimation rows summed (the ``N`` of the standard errors).
     """
 
     candidates: tuple[Candidate, ...]
@@ -203,6 +217,7 @@ class Selection:
     n_estimation: int
     n_validation: int
     stride: int
+    rows: float
 
     @property
     def nonlinear_helps(self) -> bool:
@@ -213,7 +228,7 @@ class Selection:
     def improvement(self) -> tuple[float, float]:
         """``(linear.validation_mse - chosen.validation_mse, its standard error)``."""
         diff = self.linear.validation_mse - self.chosen.validation_mse
-        return diff, _standard_error(self.linear, self.chosen)
+        return diff, _standard_error(self.linear, self.chosen, self.rows)
 
     def summary(self) -> dict[str, object]:
         """Plain values: the choice, the rule and every candidate."""
@@ -412,13 +427,14 @@ def select_structure(
     linear = [c for c in good if c.linear]
     if not good or not linear:
         return None
-    chosen, best = _one_se(good)
-    lin, _ = _one_se(linear)
+    rows = search.rows / search.stride
+    chosen, best = _one_se(good, rows)
+    lin, _ = _one_se(linear, rows)
     if chosen.linear:  # no nonlinear model helps: the structure is the baseline's
         chosen = lin
     held = int(np.count_nonzero(search.held))
     n_est = int(np.count_nonzero(search.design.mask))
-    return Selection(tuple(search.order), chosen, best, lin, n_est, held, search.stride)
+    return Selection(tuple(search.order), chosen, best, lin, n_est, held, search.stride, rows)
 
 
 def final_fit(u: F64, y: F64, cand: Candidate) -> StructureFit:
