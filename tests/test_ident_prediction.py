@@ -152,7 +152,7 @@ def test_whiteness_on_white_and_coloured_inputs(name, make, white, which):
     x = make(5000, np.random.default_rng(6))
     rep = whiteness_test(x)
     assert rep.white is white, rep.reason
-    assert rep.n_lags == 20 and rep.alpha == 0.01
+    assert rep.n_lags == 20 and rep.alpha == 0.001
     if white:
         assert "looks white" in rep.reason
     else:

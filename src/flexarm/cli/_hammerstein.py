@@ -138,26 +138,43 @@ def _fit_data(args: argparse.Namespace) -> int:
 
 
 def _robot(args: argparse.Namespace) -> int:
-    from ..studies.joint_identification import JointExcitation, identify_joint
+    from ..studies.joint_identification import (
+        JointExcitation,
+        design_dead_band_excitation,
+        identify_joint,
+    )
 
+    if args.design and args.duration is not None:
+        raise UsageError(f"{PROG}: error: argument --duration: not with --design (it sets it)")
     t0 = time.perf_counter()
     measurement = "sensor" if args.torque_sensor else "motor-balance"
-    with library_errors(PROG):
-        excitation = JointExcitation(**given(args, duration="duration"))
-        res = identify_joint(
-            excitation=excitation,
-            torque_measurement=measurement,
-            **given(args, n_lags="lags", rng="seed"),
-        )
     seed = args.seed
     if seed is None:
         seed = inspect.signature(identify_joint).parameters["rng"].default
+    design = None
+    with library_errors(PROG):
+        if args.design:  # the pilot and the experiment: independent streams of one seed
+            import numpy as np
+
+            pilot_rng, main_rng = np.random.default_rng(seed).spawn(2)
+            design = design_dead_band_excitation(rng=pilot_rng)
+            excitation = design.excitation
+        else:
+            excitation = JointExcitation(**given(args, duration="duration"))
+        res = identify_joint(
+            excitation=excitation,
+            torque_measurement=measurement,
+            method="correlated" if args.design else "auto",
+            **given(args, n_lags="lags"),
+            rng=main_rng if args.design else seed,
+        )
     summary = {
         "status": "ok",
         "mode": "hammerstein-robot",
         "duration_s": excitation.duration,
         "torque_measurement": measurement,
         "seed": seed,
+        "design": None if design is None else design.summary(),
         **res.summary(),
         "wall_time_s": time.perf_counter() - t0,
     }
@@ -200,17 +217,29 @@ def _format(summary: dict[str, Any]) -> str:
     if summary["mode"] == "hammerstein":
         return _format_data(summary)
     s, f, d, h = summary["stiffness"], summary["friction"], summary["drive"], summary["hammerstein"]
-    return "\n".join(
-        [
-            f"{PROG}: random-torque experiment on the nonlinear joint "
-            f"({summary['duration_s']:g} s, tau_s by {summary['torque_measurement']})",
-            f"  stiffness curve: RMS error {s['rms_error']:.4g} {s['y_unit']}",
-            f"  friction curve:  RMS error {f['rms_error']:.4g} {f['y_unit']}",
-            f"  drive nonlinearity (Hammerstein): RMS error {d['rms_error']:.4g} {d['y_unit']}",
-            f"  Hammerstein free-run fit on held-out data: {h['fit_percent']:.2f} % "
-            f"(reference {h['reference_fit_percent']:.2f} %)",
-        ]
-    )
+    db, design = summary["dead_band"], summary["design"]
+    lines = [
+        f"{PROG}: random-torque experiment on the nonlinear joint "
+        f"({summary['duration_s']:g} s, tau_s by {summary['torque_measurement']})",
+    ]
+    if design is not None:
+        lines.append(
+            f"  designed for the dead band: {100 * design['dead_band_fraction']:g} % of the "
+            f"commands within +-{design['dead_band_span_Nm']:g} N m, {design['n_knots']} knots, "
+            f"{design['n_holds']} estimation holds (pilot {design['pilot']['duration_s']:g} s)"
+        )
+    lines += [
+        f"  stiffness curve: RMS error {s['rms_error']:.4g} {s['y_unit']}",
+        f"  friction curve:  RMS error {f['rms_error']:.4g} {f['y_unit']}",
+        f"  drive nonlinearity (Hammerstein, {h['method']} path): RMS error "
+        f"{d['rms_error']:.4g} {d['y_unit']}",
+        f"  dead band: half-width {db['half_width_negative_Nm']:.2f} / "
+        f"{db['half_width_positive_Nm']:.2f} N m (true {db['true_half_width_Nm']:g}); RMS error "
+        f"{db['rms_error_Nm']:.3g} N m within +-{db['span_Nm']:g} N m",
+        f"  Hammerstein free-run fit on held-out data: {h['fit_percent']:.2f} % "
+        f"(reference {h['reference_fit_percent']:.2f} %)",
+    ]
+    return "\n".join(lines)
 
 
 _DESCRIPTION = """\
@@ -227,7 +256,10 @@ gives two points where it is known (the paper's two-point normalisation).
 Without DATA: the robot experiment (paper section IX): a nonlinear flexible joint
 driven by a random torque for --duration s (--seed), its stiffness, friction and
 drive curves identified and compared with the truth
-(flexarm.studies.joint_identification).
+(flexarm.studies.joint_identification). --design sizes the experiment to resolve
+the drive's dead band (commands concentrated near it, the duration from a pilot
+run; the pilot and the experiment draw from default_rng(S).spawn(2)) and
+identifies it on the correlated-input path.
 """
 
 _EPILOG = """\
@@ -286,6 +318,11 @@ def add_parser(isub: Any) -> None:
     r = p.add_argument_group("robot experiment (without DATA)")
     robot_options = [
         r.add_argument("--duration", type=float, metavar="SECONDS", help="record (default 60)"),
+        r.add_argument(
+            "--design",
+            action="store_true",
+            help="design the excitation to resolve the drive's dead band (sets the duration)",
+        ),
         r.add_argument(
             "--torque-sensor",
             action="store_true",

@@ -135,8 +135,8 @@ class HammersteinIdentifier(HyperParameters):
     validation_fraction : float, default 0.25
         Trailing fraction held out to choose the correlated path's structure and
         the baseline's order, in (0, 0.5].
-    alpha : float, default 0.01
-        Level of the whiteness test.
+    alpha : float, default 0.001
+        Level of the whiteness test (:mod:`flexarm.ident.whiteness`).
 
     Attributes
     ----------
