@@ -35,6 +35,11 @@ Estimation, for a given order ``l`` and knot count ``K``
    noise colour. On data that do not follow the paper's noise model
    (the DaISy arm) the instruments can lose, and least squares is kept.
 
+The linear algebra is small (at most a few hundred unknowns), so it runs on one
+BLAS thread (:func:`one_blas_thread`, through ``threadpoolctl`` when it is
+installed — scikit-learn brings it): on a busy machine a multithreaded BLAS
+spends more time waiting for its threads than solving.
+
 References
 ----------
 * H.-F. Chang, R. Luus, "A noniterative method for identification using
@@ -49,7 +54,10 @@ References
 
 from __future__ import annotations
 
+import importlib
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -58,7 +66,7 @@ from ._arx_loops import hammerstein_gram, instrument_cross
 from .hatbasis import evaluate, locate, quantile_knots
 from .systems import spectral_radius
 
-__all__ = ["Design", "Located", "StructureFit", "fit_structure", "n_params"]
+__all__ = ["Design", "Located", "StructureFit", "fit_structure", "n_params", "one_blas_thread"]
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -67,6 +75,16 @@ I64 = NDArray[np.int64]
 MAX_IV_STEPS = 4
 #: Relative decrease of the output error below which the steps stop (converged).
 IV_TOLERANCE = 1e-6
+
+
+def one_blas_thread() -> AbstractContextManager[Any]:
+    """A context in which BLAS runs on one thread (``threadpoolctl``), or a no-op without it."""
+    try:  # optional (no type information): imported by name
+        threadpoolctl = importlib.import_module("threadpoolctl")
+    except ImportError:  # pragma: no cover - optional
+        return nullcontext()
+    limits: AbstractContextManager[Any] = threadpoolctl.threadpool_limits(limits=1, user_api="blas")
+    return limits
 
 
 def n_params(order: int, n_knots: int) -> int:

@@ -71,7 +71,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from .arx import Design, Located, StructureFit, fit_structure, n_params
+from .arx import Design, Located, StructureFit, fit_structure, n_params, one_blas_thread
 
 __all__ = [
     "BATCHES",
@@ -372,6 +372,37 @@ class _Search:
         return None if best is None else best.n_knots
 
 
+def _search(
+    u: F64,
+    y: F64,
+    max_order: int,
+    order: int | None,
+    n_knots: int | None,
+    validation_fraction: float,
+    max_rows: int,
+) -> _Search:
+    """The candidates tried (module docstring: the linear ones, then by coordinates)."""
+    search = _Search(u, y, validation_fraction, max_rows)
+    orders = [order] if order is not None else list(range(1, max_order + 1))
+    search.scan_orders(2, orders, None)
+    if n_knots is not None:
+        search.scan_orders(n_knots, orders, PATIENCE if order is None else None)
+    elif search.distinct > 2:
+        grid = [k for k in KNOT_GRID if 2 < k <= search.distinct]
+        k_now: int | None = max([k for k in grid if k <= START_KNOTS] or grid[:1])
+        seen: set[tuple[int, int]] = set()
+        for _ in range(ROUNDS):  # coordinate search: orders at k_now, knots at that order
+            assert k_now is not None
+            best_order = search.scan_orders(k_now, orders, PATIENCE if order is None else None)
+            if best_order is None or (best_order, k_now) in seen:
+                break
+            seen.add((best_order, k_now))
+            k_now = search.scan_knots(best_order, grid)
+            if k_now is None:
+                break
+    return search
+
+
 def select_structure(
     u: F64,
     y: F64,
@@ -405,24 +436,8 @@ def select_structure(
     Selection or None
         None if no candidate gave a stable model.
     """
-    search = _Search(u, y, validation_fraction, max_rows)
-    orders = [order] if order is not None else list(range(1, max_order + 1))
-    search.scan_orders(2, orders, None)
-    if n_knots is not None:
-        search.scan_orders(n_knots, orders, PATIENCE if order is None else None)
-    elif search.distinct > 2:
-        grid = [k for k in KNOT_GRID if 2 < k <= search.distinct]
-        k_now: int | None = max([k for k in grid if k <= START_KNOTS] or grid[:1])
-        seen: set[tuple[int, int]] = set()
-        for _ in range(ROUNDS):  # coordinate search: orders at k_now, knots at that order
-            assert k_now is not None
-            best_order = search.scan_orders(k_now, orders, PATIENCE if order is None else None)
-            if best_order is None or (best_order, k_now) in seen:
-                break
-            seen.add((best_order, k_now))
-            k_now = search.scan_knots(best_order, grid)
-            if k_now is None:
-                break
+    with one_blas_thread():
+        search = _search(u, y, max_order, order, n_knots, validation_fraction, max_rows)
     good = [c for c in search.order if math.isfinite(c.validation_mse)]
     linear = [c for c in good if c.linear]
     if not good or not linear:
@@ -443,7 +458,8 @@ def final_fit(u: F64, y: F64, cand: Candidate) -> StructureFit:
     Falls back to the candidate's own fit on the estimation part if the whole
     record gives no stable model.
     """
-    fit = fit_structure(u, y, cand.order, cand.n_knots)
+    with one_blas_thread():
+        fit = fit_structure(u, y, cand.order, cand.n_knots)
     if fit is None:
         assert cand.fit is not None  # a chosen candidate always has a stable fit
         return cand.fit

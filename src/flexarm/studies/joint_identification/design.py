@@ -48,10 +48,10 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, replace
-from typing import Any
 
 import numpy as np
 
+from ..._io import JSONValue
 from ..._validation import check_real, check_rng
 from ...errors import InvalidTypeError, InvalidValueError
 from ...ident._hammerstein_params import CORRELATED_MAX_ORDER
@@ -102,7 +102,7 @@ class DeadBandDesign:
     pilot: dict[str, float]
     capped: bool
 
-    def summary(self) -> dict[str, Any]:
+    def summary(self) -> dict[str, JSONValue]:
         """Plain values for JSON."""
         ex = self.excitation
         return {
@@ -115,7 +115,7 @@ class DeadBandDesign:
             "dead_band_fraction": ex.dead_band_fraction,
             "dead_band_span_Nm": ex.dead_band_span,
             "amplitude_Nm": ex.amplitude,
-            "pilot": dict(self.pilot),
+            "pilot": {k: float(v) for k, v in self.pilot.items()},
             "capped": self.capped,
         }
 
