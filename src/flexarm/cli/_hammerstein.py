@@ -249,8 +249,8 @@ best linear ARX model of the same data (flexarm.ident.HammersteinIdentifier).
 a white input takes the paper's path (the linear part by the correlation
 approach, the nonlinearity by eq. 14); any other input the correlated-input
 path (over-parameterised ARX on a piecewise-linear basis for the nonlinearity,
-rank-one separation, instrumental variables; order and knots chosen on the
-held-out last quarter). The nonlinearity is up to an affine map unless --known
+rank-one separation, instrumental variables; order and knots chosen on held-out
+blocks, every fourth of twenty). The nonlinearity is up to an affine map unless --known
 gives two points where it is known (the paper's two-point normalisation).
 
 Without DATA: the robot experiment (paper section IX): a nonlinear flexible joint

@@ -20,11 +20,11 @@ from .bandwidth import as_rule
 from .correlation import check_known_points
 from .kernels import KERNELS
 from .lags import WHITE_MAX_ORDER
-from .linear import check_fraction
+from .linear import MIN_SAMPLES, check_fraction
 from .options import INSTRUMENTS, METHODS, ORDER_RULES
 from .whiteness import WhitenessReport, whiteness_test
 
-__all__ = ["CORRELATED_MAX_ORDER", "choose_path", "correlated_orders", "validate"]
+__all__ = ["CORRELATED_MAX_ORDER", "check_length", "choose_path", "correlated_orders", "validate"]
 
 F64 = NDArray[np.float64]
 _OWNER = "HammersteinIdentifier"
@@ -120,3 +120,17 @@ def correlated_orders(p: Mapping[str, Any], baseline: bool = False) -> tuple[int
             f"path (with max_order >= 1). Got order={order!r}, max_order={p['max_order']!r}."
         )
     return (None if order == "auto" else int(order)), top
+
+
+def check_length(p: Mapping[str, Any], n: int) -> None:
+    """A record of ``n`` samples is long enough for :meth:`fit` (``MIN_SAMPLES``, and
+    ``max(warmup, 4 n_lags)`` when the white path is asked for)."""
+    minimum = MIN_SAMPLES
+    why = "held-out validation of the structure and of the linear baseline"
+    if p["method"] == "white" and max(p["warmup"], 4 * p["n_lags"]) > MIN_SAMPLES:
+        minimum, why = max(p["warmup"], 4 * p["n_lags"]), "max(warmup, 4 * n_lags)"
+    if n < minimum:
+        raise InvalidValueError(
+            f"The 'u' parameter of {_OWNER} must hold at least {minimum} samples "
+            f"({why}). Got {n} instead."
+        )

@@ -62,7 +62,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import check_array
 from ..errors import InvalidValueError
 from ._hammerstein_io import load, save
-from ._hammerstein_params import choose_path, correlated_orders, validate
+from ._hammerstein_params import check_length, choose_path, correlated_orders, validate
 from ._params import HyperParameters
 from .arma import ARMAFit, arma_from_impulse_response
 from .bandwidth import Silverman
@@ -71,7 +71,7 @@ from .correlated import CorrelatedResult, solve_correlated
 from .correlation import KnownPoints, Solution, two_point_normalisation
 from .hatbasis import evaluate, locate
 from .lags import WHITE_MAX_ORDER, LagRegressions, solve_white
-from .linear import MIN_SAMPLES, LinearARX
+from .linear import LinearARX
 from .prediction import check_input, check_record, max_lag, predict_output, r2_score
 from .regression import NotFittedError, SemiRecursiveKernelRegression
 from .report import IdentificationReport, build_report
@@ -222,9 +222,8 @@ class HammersteinIdentifier(HyperParameters):
     # ---------------------------------------------------------------- fitting
 
     def _reset(self) -> None:
-        for name in ("_params", "_frozen", "_lags", "_cache", "_path", "_result", "_report"):
-            self.__dict__.pop(name, None)
-        for name in ("whiteness_", "baseline_", "_n_seen"):
+        for name in ("_params", "_frozen", "_lags", "_cache", "_path", "_result", "_report",
+                     "whiteness_", "baseline_", "_n_seen"):  # fmt: skip
             self.__dict__.pop(name, None)
 
     def fit(self, u: ArrayLike, y: ArrayLike) -> Self:
@@ -244,16 +243,7 @@ class HammersteinIdentifier(HyperParameters):
         """
         ua, ya = check_record(u, y, _OWNER)
         p = self._validated()
-        n = ua.shape[0]
-        minimum = MIN_SAMPLES
-        why = "held-out validation of the structure and of the linear baseline"
-        if p["method"] == "white" and max(p["warmup"], 4 * p["n_lags"]) > MIN_SAMPLES:
-            minimum, why = max(p["warmup"], 4 * p["n_lags"]), "max(warmup, 4 * n_lags)"
-        if n < minimum:
-            raise InvalidValueError(
-                f"The 'u' parameter of {_OWNER} must hold at least {minimum} samples "
-                f"({why}). Got {n} instead."
-            )
+        check_length(p, ua.shape[0])
         check_record(ua, ya, _OWNER, varying=True)
         path, reason, white = choose_path(p, ua)
         self._reset()
