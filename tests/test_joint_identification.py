@@ -178,6 +178,10 @@ def test_example_script(tmp_path, capsys):
     assert (tmp_path / "identify_joint.png").stat().st_size > 0
     assert module.main(["--duration", "2"]) == 2  # too short: one line on stderr
     assert "at least 300 holds" in capsys.readouterr().err
+    assert module.main(["--design"]) == 0  # the experiment sized for the dead band
+    out = capsys.readouterr().out
+    assert out.startswith("design: 50 % of the commands") and "correlated path" in out
+    assert "dead band: half-width" in out
     import matplotlib.pyplot as plt
 
     plt.close("all")
