@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 from pathlib import Path
@@ -18,7 +19,7 @@ from ..studies.reproduction.cases import (
     DEFAULT_LAW,
     DEFAULT_TOLERANCE,
 )
-from ._common import EXIT_FAILURE, UsageError, check_out
+from ._common import EXIT_FAILURE, UsageError, check_out, write_failed
 
 __all__ = ["add_parser"]
 
@@ -26,16 +27,15 @@ _PROG = "flexarm reproduce"
 
 
 def _ks_list(text: str) -> tuple[float, ...]:
+    fail = argparse.ArgumentTypeError(
+        f"must be comma-separated finite numbers >= 0. Got {text!r} instead."
+    )
     try:
-        values = tuple(float(v) for v in text.split(",") if v.strip())
+        values = tuple(float(v) for v in text.split(","))
     except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"must be comma-separated numbers >= 0. Got {text!r} instead."
-        ) from None
-    if not values or any(not (v >= 0) for v in values):
-        raise argparse.ArgumentTypeError(
-            f"must be comma-separated numbers >= 0. Got {text!r} instead."
-        )
+        raise fail from None
+    if not values or not all(math.isfinite(v) and v >= 0 for v in values):
+        raise fail
     return values
 
 
@@ -62,7 +62,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     try:
         files = rep.write(out)
     except OSError as exc:
-        print(f"{_PROG}: error: cannot write {str(out)!r}: {exc}", file=sys.stderr)
+        print(write_failed(_PROG, out, exc), file=sys.stderr)
         return EXIT_FAILURE
     if args.json:
         print(json.dumps({**rep.summary(), "out": str(out), "files": files}, indent=2))

@@ -22,7 +22,7 @@ from ..sim.scenario_schema import (
     apply_overrides,
     read_scenario,
 )
-from ._common import EXIT_FAILURE, UsageError, check_out, json_ready
+from ._common import EXIT_FAILURE, UsageError, check_out, json_ready, write_failed
 
 if TYPE_CHECKING:
     from ..sim.scenario import Scenario
@@ -196,7 +196,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         try:
             result.write(out, summary)
         except OSError as exc:
-            print(f"flexarm simulate: error: cannot write {str(out)!r}: {exc}", file=sys.stderr)
+            print(write_failed("flexarm simulate", out, exc), file=sys.stderr)
             return EXIT_FAILURE
     if diverged is not None:
         kept = f"; the run up to then is in {out}" if out is not None else "; nothing written"

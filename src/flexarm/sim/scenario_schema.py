@@ -90,6 +90,7 @@ builds, with the same names and SI units::
     # smoothing = 0.1         # s: zero-phase smoothing of the reference path (preview)
     # feedforward = true      # rigid inverse dynamics (default: the controller's choice)
     # check_sampling = true   # refuse a period beyond the sampled loop's bound
+    # record_every = 1        # record every k-th control instant (and the last)
 
 ``delay = "seed"`` or ``"dispersive"`` computes the wave-travel delay
 (:func:`flexarm.sensing.delays.travel_delay`) over the path length along the links
@@ -276,6 +277,8 @@ def read_scenario(path: str | os.PathLike[str]) -> dict[str, Any]:
             return tomllib.load(fh)
     except FileNotFoundError:
         raise ScenarioError(source, None, "no such file") from None
+    except IsADirectoryError:
+        raise ScenarioError(source, None, "a directory, not a scenario file") from None
     except OSError as exc:
         raise ScenarioError(source, None, f"cannot read the file: {exc.strerror or exc}") from None
     except tomllib.TOMLDecodeError as exc:
