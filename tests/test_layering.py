@@ -64,6 +64,7 @@ WITHIN: dict[str, list[str]] = {
         "sampling",
         "reflected",
         "lqg",
+        "interop",
     ],
     "sim": [
         "metrics",
