@@ -65,6 +65,7 @@ WITHIN: dict[str, list[str]] = {
         "reflected",
         "lqg",
         "interop",
+        "custom",
     ],
     "sim": [
         "metrics",

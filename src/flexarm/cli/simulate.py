@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..control.custom import FACTORY_SPEC
 from ..errors import InvalidTypeError, InvalidValueError
 from ..sensing.delays import DELAY_METHODS
 from ..sensing.sensors import SENSOR_MODELS, PointSensor, Sensor, parse_sensor
@@ -58,6 +59,15 @@ def _sensor_option(text: str) -> Sensor:
         return parse_sensor(text)
     except (TypeError, ValueError) as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _controller_option(text: str) -> str:
+    if text in CONTROLLERS or FACTORY_SPEC.match(text):
+        return text
+    raise argparse.ArgumentTypeError(
+        f"must be one of {', '.join(CONTROLLERS)} or MODULE:FACTORY (your own). "
+        f"Got {text!r} instead."
+    )
 
 
 def _delay_option(text: str) -> str | float:
@@ -245,13 +255,16 @@ def add_parser(sub: Any) -> None:
     sim.add_argument("--scenario", metavar="FILE.toml", help="scenario file (TOML)")
     sim.add_argument(
         "--controller",
-        choices=CONTROLLERS,
+        type=_controller_option,
+        metavar="|".join((*CONTROLLERS, "MODULE:FACTORY")),
         help="pd: the paper's Jacobian-transpose PD gains from the first link's first "
         "frequency (default); jt-pd: JacobianTransposePD with the scenario's kp, kd; "
         "joint-pd: JointPD; fuzzy: the paper's gains with the fuzzy adaptive law "
         "(FuzzyAdaptiveJTPD; set ks and law in the scenario file); lqg: observer-based "
         "LQG from the sensor alone with rigid feedforward; reflected: PD on the reflected "
-        "output (alpha in the scenario file)",
+        "output (alpha in the scenario file); MODULE:FACTORY: your own, FACTORY(arm, **the "
+        "scenario's other controller keys) returning a Controller (module from the current "
+        "directory or sys.path; examples/my_controller.py)",
     )
     sim.add_argument(
         "--sensor",
