@@ -69,6 +69,7 @@ WITHIN: dict[str, list[str]] = {
     ],
     "sim": [
         "metrics",
+        "animation",  # before results: SimulationResult.animate calls it
         "results",
         "integrator",
         "loop",

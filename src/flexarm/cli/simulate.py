@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -13,6 +14,7 @@ from ..control.custom import FACTORY_SPEC
 from ..errors import InvalidTypeError, InvalidValueError
 from ..sensing.delays import DELAY_METHODS
 from ..sensing.sensors import SENSOR_MODELS, PointSensor, Sensor, parse_sensor
+from ..sim.animation import ANIMATION_FORMATS
 from ..sim.results import RESULT_FILES, SimulationError
 from ..sim.scenario_schema import (
     CONTROLLERS,
@@ -170,11 +172,28 @@ def _format_summary(summary: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _check_animate(path: str | None) -> Path | None:
+    """The ``--animate`` file, checked before anything runs: a .gif or .mp4 (ffmpeg on
+    PATH) in an existing directory."""
+    if path is None:
+        return None
+    target = Path(os.path.abspath(path))
+    option = "flexarm simulate: error: argument --animate"
+    if target.suffix.lower() not in ANIMATION_FORMATS:
+        raise UsageError(f"{option}: must end in .gif or .mp4. Got {path!r} instead.")
+    if target.suffix.lower() == ".mp4" and shutil.which("ffmpeg") is None:
+        raise UsageError(f"{option}: writing an MP4 needs ffmpeg on PATH (not found); use a .gif")
+    if not target.parent.is_dir():
+        raise UsageError(f"{option}: no such directory: {str(target.parent)!r}")
+    return target
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
     scenario = _build_scenario(args)
     out = Path(os.path.abspath(args.out)) if args.out is not None else None
     if out is not None:
         check_out(out, "flexarm simulate")
+    movie = _check_animate(args.animate)
     from ..sim.closed_loop import simulate
 
     try:
@@ -196,6 +215,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             "run": result.info,
             "out": args.out,
             "files": [] if out is None else list(RESULT_FILES),
+            "animation": None if movie is None else str(movie),
         }
     )
     if out is not None:
@@ -203,6 +223,14 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             result.write(out, summary)
         except OSError as exc:
             print(f"flexarm simulate: error: cannot write {str(out)!r}: {exc}", file=sys.stderr)
+            return EXIT_FAILURE
+    if movie is not None:
+        from ..sim.animation import write_animation
+
+        try:
+            write_animation(result, movie)
+        except OSError as exc:
+            print(f"flexarm simulate: error: cannot write {str(movie)!r}: {exc}", file=sys.stderr)
             return EXIT_FAILURE
     if args.json:
         print(json.dumps(summary, indent=2))
@@ -335,5 +363,11 @@ def add_parser(sub: Any) -> None:
     )
     sim.add_argument("--seed", type=int, metavar="N", help="seed of the sensor noise")
     sim.add_argument("--out", metavar="DIR", help="write the results into DIR (see below)")
+    sim.add_argument(
+        "--animate",
+        metavar="FILE.gif|FILE.mp4",
+        help="write an animation of the deflected arm (25 frames per simulated second; GIF "
+        "through Pillow, MP4 through ffmpeg, which must be on PATH)",
+    )
     sim.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
     sim.set_defaults(func=_cmd_simulate)
