@@ -95,7 +95,9 @@ class FlexibleArmVectorEnv(gym.vector.VectorEnv[F64, F64, NDArray[np.generic]]):
         self.num_envs = check_int(num_envs, "num_envs", owner, minimum=1)
         self.render_mode = None
         self.metadata = {"autoreset_mode": mode, "render_modes": []}
-        self._batch = ArmBatch(self.config, self.num_envs, check_int(workers, "workers", owner))
+        self._batch = ArmBatch(
+            self.config, self.num_envs, check_int(workers, "workers", owner, minimum=1)
+        )
         limit = self.config.limits
         low, high = self._batch.arrays.low, self._batch.arrays.high
         self.single_action_space = gym.spaces.Box(-limit, limit, dtype=np.float64)
