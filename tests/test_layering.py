@@ -26,7 +26,8 @@ LAYERS: list[tuple[str, ...]] = [
     ("sensing",),  # what a controller can see: sensors and transport delays
     ("control",),  # references, shapers, control laws, linear analysis
     ("sim",),  # the simulator, its results and metrics, scenario files
-    ("studies",),  # the paper's reproduction, the robot-joint identification study
+    # the paper's reproduction, the robot-joint identification study; Gymnasium environments
+    ("studies", "envs"),
     ("cli",),  # the command line
     ("__main__", "__init__", "modes"),  # the package's entry points and facades
 ]
@@ -63,9 +64,12 @@ WITHIN: dict[str, list[str]] = {
         "sampling",
         "reflected",
         "lqg",
+        "interop",
+        "custom",
     ],
     "sim": [
         "metrics",
+        "animation",  # before results: SimulationResult.animate calls it
         "results",
         "integrator",
         "loop",
@@ -79,6 +83,7 @@ WITHIN: dict[str, list[str]] = {
         "scenario",
     ],
     "fuzzy": ["sets", "compiled", "system", "paper"],
+    "envs": ["config", "kernel", "core", "env", "vector"],
     "ident": [
         "options",
         "_params",

@@ -63,7 +63,11 @@ builds, with the same names and SI units::
                               #   zeta = 0.707, ks = 1.0, law = "scaled" | "damping");
                               # "lqg": observer-based LQG from the sensor alone (keys: the
                               #   LQG parameters, model_modes, model_boundary);
-                              # "reflected": PD on the reflected output (alpha, zeta)
+                              # "reflected": PD on the reflected output (alpha, zeta);
+                              # "module:factory": your own, factory(arm, **the other
+                              #   keys) returning a Controller (flexarm.control.custom;
+                              #   module beside this file, in the current directory or
+                              #   on sys.path; examples/my_controller.py)
 
     [delay]                   # transport delay of the sensed signal
     delay = 0.0               # s, or "seed" / "dispersive" (below)
