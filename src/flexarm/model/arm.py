@@ -78,9 +78,8 @@ from .._validation import (
     validate_real_fields,
 )
 from ..errors import InvalidTypeError, InvalidValueError
-from .arrays import (
-    ArmArrays,
-)
+from .arrays import ArmArrays
+from .foreshortening import shortening_matrix
 from .joints import LinearJoint, NonlinearJoint
 from .kinematics import deflected_point, rigid_jacobian, rigid_point, two_link_inverse_kinematics
 from .lagrangian import body_terms
@@ -141,6 +140,7 @@ class FlexibleArm:
     mode_amplitude: float = 0.1
     joint_friction: str = "link"
     rotor_coupling: bool = True
+    geometric_stiffening: bool = False
     _derived: dict[str, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -156,11 +156,12 @@ class FlexibleArm:
         if self.joints is not None:
             set_(self, "joints", self._check_joints(self.joints, len(links)))
         check_option(self.joint_friction, "joint_friction", _OWNER, FRICTION_SIDES)
-        if not isinstance(self.rotor_coupling, bool):
-            raise InvalidTypeError(
-                f"The 'rotor_coupling' parameter of {_OWNER} must be a bool. "
-                f"Got {self.rotor_coupling!r} instead."
-            )
+        for flag in ("rotor_coupling", "geometric_stiffening"):
+            if not isinstance(getattr(self, flag), bool):
+                raise InvalidTypeError(
+                    f"The '{flag}' parameter of {_OWNER} must be a bool. "
+                    f"Got {getattr(self, flag)!r} instead."
+                )
         check_option(self.mode_normalization, "mode_normalization", _OWNER, NORMALIZATIONS)
         set_(
             self,
@@ -518,8 +519,28 @@ class FlexibleArm:
             )
         q = self._check_batch_q(q)
         phi = self.modes[link].shape(distance)[:, 0]
-        pos = deflected_point(self.arrays, phi, np.atleast_2d(q), link, distance)
+        S = shortening_matrix(self.modes[link], distance)[:, :, 0]
+        pos = deflected_point(self.arrays, phi, np.atleast_2d(q), link, distance, S)
         return pos[0] if q.ndim == 1 else pos
+
+    def point_basis(self, link: int, distance: float) -> NDArray[np.float64]:
+        """What the compiled :func:`flexarm.model.dynamics.point_kinematics` needs of a
+        point: ``link``'s mode shapes at ``distance`` and, with geometric
+        stiffening, the shortening matrix ``S(distance)`` row by row.
+
+        Returns
+        -------
+        ndarray, shape (n_modes,) or (n_modes + n_modes**2,)
+            Contiguous, float64.
+        """
+        link = self._check_link(link)
+        distance = check_real(distance, "distance", _OWNER)
+        modes = self.modes[link]
+        phi = modes.shape(distance)[:, 0]
+        if not self.geometric_stiffening:
+            return np.ascontiguousarray(phi)
+        S = shortening_matrix(modes, distance)[:, :, 0]
+        return np.ascontiguousarray(np.concatenate([phi, S.ravel()]))
 
     def tip_position(self, q: ArrayLike) -> NDArray[np.float64]:
         """End-effector position with deflection, shape ``(2,)`` or ``(m, 2)``, m."""

@@ -127,13 +127,21 @@ def two_link_inverse_kinematics(l1: float, l2: float, position: F64, elbow: str,
     return np.stack([t1, t2], axis=-1)
 
 
-def deflected_point(arrays: ArmArrays, phi: F64, q: F64, link: int, distance: float) -> F64:
+def deflected_point(
+    arrays: ArmArrays,
+    phi: F64,
+    q: F64,
+    link: int,
+    distance: float,
+    shortening: F64 | None = None,
+) -> F64:
     """Position of the point ``distance`` along ``link`` with the links' deflection.
 
     Parameters
     ----------
     arrays : ArmArrays
-        The packed arm (link lengths, tip deflections and slopes of the modes).
+        The packed arm (link lengths, tip deflections and slopes of the modes,
+        foreshortening at the tips).
     phi : ndarray, shape (n_modes of ``link``,)
         ``link``'s mode shapes at ``distance``.
     q : ndarray, shape (m, n_dof)
@@ -142,24 +150,35 @@ def deflected_point(arrays: ArmArrays, phi: F64, q: F64, link: int, distance: fl
         0-based link index.
     distance : float
         Distance along the undeformed link from its joint, m.
+    shortening : ndarray, shape (n_modes of ``link``, n_modes of ``link``), optional
+        ``S(distance)`` (:func:`flexarm.model.foreshortening.shortening_matrix`):
+        the point's own foreshortening with geometric stiffening.
 
     Returns
     -------
     ndarray, shape (m, 2)
         ``(x, y)`` in m, base frame. Joint ``i`` turns link ``i`` relative to the
-        deflected tip of link ``i - 1``: the tip slopes add to the angles.
+        deflected tip of link ``i - 1``: the tip slopes add to the angles. With
+        geometric stiffening (``arrays`` holds the foreshortening) a point at
+        ``x`` along a link sits at ``x - u(x)`` along its clamped axis.
     """
     ms = arrays.mode_start
+    stiff = arrays.shortening_quartic.shape[1] > 0
     pos = np.zeros((q.shape[0], 2))
     alpha = np.zeros(q.shape[0])
     for i in range(link + 1):
         s = slice(int(ms[i]), int(ms[i + 1]))
         alpha = alpha + q[:, i]
+        d = q[:, s]
         if i < link:
-            x, w = arrays.link[i, LEN], q[:, s] @ arrays.tip_deflection[s]
+            x, w = arrays.link[i, LEN], d @ arrays.tip_deflection[s]
+            S = arrays.shortening_tip[s, s]
         else:
-            x, w = distance, q[:, s] @ phi
+            x, w = distance, d @ phi
+            S = shortening if shortening is not None else np.zeros((d.shape[1],) * 2)
+        if stiff:
+            x = x - 0.5 * np.einsum("mj,jk,mk->m", d, S, d)
         c, sn = np.cos(alpha), np.sin(alpha)
         pos += np.column_stack([x * c - w * sn, x * sn + w * c])
-        alpha = alpha + q[:, s] @ arrays.tip_slope[s]
+        alpha = alpha + d @ arrays.tip_slope[s]
     return pos
