@@ -25,7 +25,6 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from .._compile import njit_runtime_free
 from .arrays import (
     AX_BETA,
     AX_BETA_MODES,
@@ -54,6 +53,8 @@ from .arrays import (
     Workspace,
     make_workspace,
 )
+from .dynamics_foreshortening import link_foreshortening
+from .dynamics_points import point_kinematics
 from .dynamics_two_links import (
     accelerations_two_links_one_mode,
     forward_dynamics_two_links_one_mode,
@@ -107,122 +108,6 @@ def joint_forces(q: F64, dq: F64, tau: F64, model: ArmArrays, rhs: F64) -> None:
                 + jt[i, g + 5] * v
             )
             rhs[k] -= f
-
-
-@nb.njit(cache=True, nogil=True, inline="always")
-def _foreshortening(
-    q: F64,
-    dq: F64,
-    model: ArmArrays,
-    a0: int,
-    a1: int,
-    cx: float,
-    ad: float,
-    bx: float,
-    by: float,
-    F: F64,
-) -> float:  # pragma: no cover - compiled
-    """The foreshortening terms of the link whose modes are ``q[a0:a1]``, into ``F``
-    (rows ``AX_*`` of :mod:`flexarm.model.arrays`); returns ``int rho (x - u) dx``.
-
-    With ``u = 1/2 delta' S(x) delta`` (:mod:`flexarm.model.foreshortening`),
-    ``y = int rho S delta``, ``R[a, b] = int rho phi_a (S delta)_b``,
-    ``Q[b, d] = int rho (S delta)_b (S delta)_d`` and
-    ``Q~[b, d] = int rho (S delta)_b (S delta_dot)_d``, the link's body inertia
-    gains ``Mb[ux, delta] = -y``, ``Mb[uy, alpha] = -1/2 delta' y``,
-    ``Mb[alpha, alpha] += -delta' X delta + 1/4 delta' Q delta``,
-    ``Mb[alpha, delta] += R' delta - 1/2 R delta``, ``Mb[delta, delta] += Q``, and
-    its inertial force at ``qddot = 0`` the terms written below (the NumPy
-    reference :func:`flexarm.model.lagrangian._link_body` has the derivation).
-    """
-    nm = a1 - a0
-    St, Sm, X = model.shortening_tip, model.shortening_mass, model.shortening_moment
-    T3, T4 = model.shortening_cubic, model.shortening_quartic
-    rq, rr, rt = AX_Q, AX_Q + nm, AX_Q + 2 * nm  # rows of Q, R, Q~
-    p = 0.0  # delta' y
-    px = 0.0  # delta' X delta
-    pxd = 0.0  # delta' X delta_dot
-    ul2 = 0.0  # delta' S(L) delta
-    sdd = 0.0  # delta_dot' S(L) delta_dot
-    sld = 0.0  # (S(L) delta) . delta_dot
-    ydd = 0.0  # y . delta_dot
-    dsd = 0.0  # delta_dot' (int rho S) delta_dot
-    rdd = 0.0  # delta' Rd delta_dot, Rd[a, b] = int rho phi_a (S delta_dot)_b
-    for j in range(nm):
-        g = a0 + j
-        yj = 0.0
-        slj = 0.0
-        xj = 0.0
-        sdj = 0.0
-        for c in range(nm):
-            qc, dc = q[a0 + c], dq[a0 + c]
-            yj += Sm[g, a0 + c] * qc
-            slj += St[g, a0 + c] * qc
-            xj += X[g, a0 + c] * qc
-            sdj += St[g, a0 + c] * dc
-            dsd += dq[g] * Sm[g, a0 + c] * dc
-        F[AX_Y, j] = yj
-        F[AX_SL, j] = slj
-        F[AX_BETA_MODES, j] = xj  # X delta, for now
-        p += q[g] * yj
-        px += q[g] * xj
-        pxd += dq[g] * xj
-        ul2 += q[g] * slj
-        sdd += dq[g] * sdj
-        sld += slj * dq[g]
-        ydd += yj * dq[g]
-        for b in range(nm):
-            r = 0.0
-            t = 0.0
-            for c in range(nm):
-                r += T3[g, b, c] * q[a0 + c]
-                t += T3[g, b, c] * dq[a0 + c]
-            F[rr + j, b] = r
-            rdd += q[g] * t * dq[a0 + b]
-    for b in range(nm):
-        gb = a0 + b
-        for d in range(nm):
-            qbd = 0.0
-            tbd = 0.0
-            for a in range(nm):
-                sq = 0.0
-                sd = 0.0
-                for c in range(nm):
-                    t4 = T4[gb, a, d, c]
-                    sq += t4 * q[a0 + c]
-                    sd += t4 * dq[a0 + c]
-                qbd += q[a0 + a] * sq
-                tbd += q[a0 + a] * sd
-            F[rq + b, d] = qbd
-            F[rt + b, d] = tbd
-    dqd = 0.0  # delta' Q delta
-    dqdd = 0.0  # delta' Q delta_dot
-    for b in range(nm):
-        for d in range(nm):
-            dqd += q[a0 + b] * F[rq + b, d] * q[a0 + d]
-            dqdd += q[a0 + b] * F[rq + b, d] * dq[a0 + d]
-    ad2 = ad * ad
-    for j in range(nm):
-        wa = 0.0  # (R' delta - 1/2 R delta)_j
-        bm = 0.0  # beta_delta_j
-        for a in range(nm):
-            wa += F[rr + a, j] * q[a0 + a] - 0.5 * F[rr + j, a] * q[a0 + a]
-            bm += (
-                -2.0 * ad * F[rr + j, a] * dq[a0 + a]
-                + 2.0 * ad * F[rr + a, j] * dq[a0 + a]
-                - 0.5 * ad2 * F[rq + j, a] * q[a0 + a]
-                + F[rt + j, a] * dq[a0 + a]
-            )
-        F[AX_WALPHA, j] = wa
-        F[AX_BETA_MODES, j] = bm + ad2 * F[AX_BETA_MODES, j] - bx * F[AX_Y, j]
-    F[AX_IALPHA, 0] = -px + 0.25 * dqd
-    F[AX_BETA, 0] = 0.5 * ad2 * p - dsd
-    F[AX_BETA, 1] = -2.0 * ad * ydd
-    F[AX_BETA, 2] = -0.5 * by * p + rdd - 2.0 * ad * (pxd - 0.5 * dqdd)
-    F[AX_TIP, 0] = 0.5 * ul2
-    F[AX_TIP, 1] = sdd
-    F[AX_TIP, 2] = sld
-    return cx - 0.5 * p
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -320,7 +205,7 @@ def _assemble_local(q: F64, dq: F64, model: ArmArrays, ws: Workspace) -> None:  
         if stiffening:
             # Foreshortening (flexarm.model.foreshortening) into ws.axial: the link's
             # body inertia and inertial force gain the terms of u = 1/2 delta' S delta.
-            cxe = _foreshortening(q, dq, model, a0, a1, cx, ad, bx, by, ws.axial)
+            cxe = link_foreshortening(q, dq, model, a0, a1, cx, ad, bx, by, ws.axial)
             F = ws.axial
             ialpha += F[AX_IALPHA, 0]
             beta_ux += F[AX_BETA, 0]
@@ -564,87 +449,3 @@ def forward_dynamics(
         forward_dynamics_two_links_one_mode(q, dq, tau, model, ddq)
     else:
         forward_dynamics_general(q, dq, tau, model, ws, ddq)
-
-
-@njit_runtime_free(cache=True, nogil=True)
-def point_kinematics(
-    q: F64, dq: F64, model: ArmArrays, link: int, distance: float, phi: F64, out: F64
-) -> None:  # pragma: no cover - compiled
-    """Position and velocity of a point on a link, deflection included.
-
-    Parameters
-    ----------
-    q, dq : ndarray, shape (n_dof,)
-    model : ArmArrays
-    link : int
-        0-based link index.
-    distance : float
-        Distance along the undeformed link from its joint, m.
-    phi : ndarray, shape (n_modes of ``link``,) or (n_modes + n_modes**2,)
-        Mode shapes of ``link`` evaluated at ``distance``; with geometric
-        stiffening, followed by the shortening matrix ``S(distance)`` row by row
-        (:meth:`flexarm.FlexibleArm.point_basis` builds it). Without it the
-        point's own foreshortening is left out.
-    out : ndarray, shape (4,)
-        Written: ``x, y`` (m) and ``vx, vy`` (m/s) in the base frame.
-    """
-    ms = model.mode_start
-    shortening = model.shortening_quartic.shape[1] > 0
-    alpha = 0.0
-    alpha_dot = 0.0
-    px = 0.0
-    py = 0.0
-    vx = 0.0
-    vy = 0.0
-    for i in range(link + 1):
-        alpha += q[i]
-        alpha_dot += dq[i]
-        a0, a1 = ms[i], ms[i + 1]
-        nm = a1 - a0
-        w = 0.0
-        wd = 0.0
-        u = 0.0  # foreshortening of the point
-        ud = 0.0
-        if i < link:
-            x = model.link[i, LEN]
-            for r in range(a0, a1):
-                w += model.tip_deflection[r] * q[r]
-                wd += model.tip_deflection[r] * dq[r]
-            if shortening:
-                for r in range(a0, a1):
-                    sr = 0.0
-                    for c in range(a0, a1):
-                        sr += model.shortening_tip[r, c] * q[c]
-                    u += 0.5 * q[r] * sr
-                    ud += sr * dq[r]
-        else:
-            x = distance
-            for r in range(a0, a1):
-                w += phi[r - a0] * q[r]
-                wd += phi[r - a0] * dq[r]
-            if shortening and phi.shape[0] >= nm + nm * nm:
-                for j in range(nm):
-                    sr = 0.0
-                    for c in range(nm):
-                        sr += phi[nm + j * nm + c] * q[a0 + c]
-                    u += 0.5 * q[a0 + j] * sr
-                    ud += sr * dq[a0 + j]
-        c, s = np.cos(alpha), np.sin(alpha)
-        if shortening:
-            x -= u
-        px += c * x - s * w
-        py += s * x + c * w
-        # d/dt R(alpha) [x, w] = alpha_dot R S [x, w] + R [-ud, wd],  S = [[0, -1], [1, 0]]
-        vx += alpha_dot * (-c * w - s * x) - s * wd
-        vy += alpha_dot * (-s * w + c * x) + c * wd
-        if shortening:
-            vx -= c * ud
-            vy -= s * ud
-        if i < link:
-            for r in range(a0, a1):
-                alpha += model.tip_slope[r] * q[r]
-                alpha_dot += model.tip_slope[r] * dq[r]
-    out[0] = px
-    out[1] = py
-    out[2] = vx
-    out[3] = vy
