@@ -133,7 +133,9 @@ def _cable_nodes(mbs: Any, x0: np.ndarray, phi: float, length: float, n: int) ->
     c, s = math.cos(phi), math.sin(phi)
     return [
         mbs.AddNode(
-            ei.NodePoint2DSlope1(referenceCoordinates=[x0[0] + k * le * c, x0[1] + k * le * s, c, s])
+            ei.NodePoint2DSlope1(
+                referenceCoordinates=[x0[0] + k * le * c, x0[1] + k * le * s, c, s]
+            )
         )
         for k in range(n + 1)
     ]
@@ -201,7 +203,9 @@ def run_exudyn(
             m_hub = mbs.AddMarker(ei.MarkerBodyRigid(bodyNumber=bh))
             m_root = mbs.AddMarker(ei.MarkerNodeRigid(nodeNumber=nodes[0]))
             mbs.AddObject(
-                ei.ObjectJointGeneric(markerNumbers=[m_root, m_hub], constrainedAxes=[1, 1, 0, 0, 0, 1])
+                ei.ObjectJointGeneric(
+                    markerNumbers=[m_root, m_hub], constrainedAxes=[1, 1, 0, 0, 0, 1]
+                )
             )
             if prev_tip is None:
                 m_base = mbs.AddMarker(
@@ -224,7 +228,9 @@ def run_exudyn(
                     _torque_load(mbs, m_base, fn, -1.0)  # the reaction on the carrier
             else:
                 joint = mbs.AddObject(
-                    ei.ObjectJointGeneric(markerNumbers=[m_base, m_hub], constrainedAxes=[1, 1, 0, 0, 0, 1])
+                    ei.ObjectJointGeneric(
+                        markerNumbers=[m_base, m_hub], constrainedAxes=[1, 1, 0, 0, 0, 1]
+                    )
                 )
                 esym.variables.Set(names[i], float(theta0[i]))
                 _prescribe(mbs, joint, names[i], float(theta0[i]))
@@ -265,7 +271,12 @@ def run_exudyn(
 
         def sensor(node: Any) -> Any:
             return mbs.AddSensor(
-                ei.SensorNode(nodeNumber=node, outputVariableType=coords, storeInternal=True, writeToFile=False)
+                ei.SensorNode(
+                    nodeNumber=node,
+                    outputVariableType=coords,
+                    storeInternal=True,
+                    writeToFile=False,
+                )
             )
 
         s_hub = [sensor(n) for n in hubs]
@@ -273,7 +284,7 @@ def run_exudyn(
         s_tip = [sensor(n) for n in tips]
         mbs.Assemble()
         st = exu.SimulationSettings()
-        st.timeIntegration.numberOfSteps = int(round(t_end / step))
+        st.timeIntegration.numberOfSteps = round(t_end / step)
         st.timeIntegration.endTime = t_end
         st.timeIntegration.verboseMode = 0
         st.timeIntegration.newton.absoluteTolerance = 1e-6

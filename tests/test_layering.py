@@ -35,6 +35,7 @@ RANK = {name: k for k, names in enumerate(LAYERS) for name in names}
 # package's __init__ when that is lower still). Packages not listed are unordered.
 WITHIN: dict[str, list[str]] = {
     "model": [
+        "validity",
         "modes",
         "link",
         "joints",

@@ -21,10 +21,12 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._validation import check_array, check_option
 from ..errors import InvalidValueError
 from .arrays import LEN, ArmArrays
 
 __all__ = [
+    "RigidKinematics",
     "deflected_point",
     "lever_lengths",
     "rigid_jacobian",
@@ -182,3 +184,85 @@ def deflected_point(
         pos += np.column_stack([x * c - w * sn, x * sn + w * c])
         alpha = alpha + d @ arrays.tip_slope[s]
     return pos
+
+
+class RigidKinematics:
+    """The rigid-link kinematics of an arm from its link lengths: what encoders
+    imply and the paper's controllers use (eqs. 9–10). A base of
+    :class:`flexarm.FlexibleArm`, which supplies ``n_links`` and ``link_lengths``."""
+
+    _owner = "FlexibleArm"
+
+    @property
+    def n_links(self) -> int:
+        raise NotImplementedError
+
+    @property
+    def link_lengths(self) -> F64:
+        """Link lengths, m, shape ``(n_links,)``."""
+        raise NotImplementedError
+
+    def _check_theta(self, theta: ArrayLike) -> NDArray[np.float64]:
+        arr = check_array(theta, "theta", self._owner)
+        if arr.ndim not in (1, 2) or arr.shape[-1] != self.n_links:
+            raise InvalidValueError(
+                f"The 'theta' parameter of {self._owner} must be of shape ({self.n_links},) or "
+                f"(m, {self.n_links}). Got shape {arr.shape} instead."
+            )
+        return arr
+
+    def forward_kinematics(self, theta: ArrayLike) -> NDArray[np.float64]:
+        """Rigid-link tip position from joint angles (deflections ignored).
+
+        Parameters
+        ----------
+        theta : array_like, shape (n_links,) or (m, n_links)
+            Joint angles, rad.
+
+        Returns
+        -------
+        ndarray, shape (2,) or (m, 2)
+            ``x = sum L_i cos(theta_1 + ... + theta_i)``, likewise ``y``; m.
+        """
+        return rigid_point(self.link_lengths, self._check_theta(theta))[0]
+
+    def jacobian(self, theta: ArrayLike) -> NDArray[np.float64]:
+        """Rigid-link Jacobian ``d(x, y)/d theta``, shape ``(2, n_links)`` or
+        ``(m, 2, n_links)``, m/rad."""
+        return rigid_jacobian(self.link_lengths, self._check_theta(theta))
+
+    def inverse_kinematics(
+        self, position: ArrayLike, elbow: str = "positive"
+    ) -> NDArray[np.float64]:
+        """Joint angles of a two-link arm (rigid links) that put the tip at ``position``.
+
+        Parameters
+        ----------
+        position : array_like, shape (2,) or (m, 2)
+            Target ``(x, y)`` in m.
+        elbow : {"positive", "negative"}
+            The branch: the sign of ``theta_2``.
+
+        Returns
+        -------
+        ndarray, shape (2,) or (m, 2)
+            ``(theta_1, theta_2)`` in rad, ``theta_2`` in ``[0, pi]`` or ``[-pi, 0]``.
+
+        Raises
+        ------
+        ValueError
+            If the arm does not have two links or a target is out of reach.
+        """
+        if self.n_links != 2:
+            raise InvalidValueError(
+                f"inverse_kinematics needs a two-link arm. Got {self.n_links} links instead."
+            )
+        check_option(elbow, "elbow", self._owner, ("positive", "negative"))
+        p = check_array(position, "position", self._owner)
+        if p.ndim not in (1, 2) or p.shape[-1] != 2:
+            raise InvalidValueError(
+                f"The 'position' parameter of {self._owner} must be of shape (2,) or (m, 2). "
+                f"Got shape {p.shape} instead."
+            )
+        l1, l2 = float(self.link_lengths[0]), float(self.link_lengths[1])
+        return two_link_inverse_kinematics(l1, l2, p, elbow, self._owner)

@@ -4,14 +4,15 @@ Every body (link, hub, rotor, payload) contributes ``T = 1/2 (Jb dq)' Mb (Jb dq)
 with its body Jacobian ``Jb(q)`` and body inertia ``Mb(q)``; then
 ``M = sum Jb' Mb Jb`` and, by d'Alembert, the velocity terms are
 ``C(q, dq) dq = sum Jb' beta`` with ``beta`` the body-frame inertial force at
-``qddot = 0``. The derivation is in :mod:`flexarm.model.arm`; the compiled
+``qddot = 0``. The kinematic map is in :mod:`flexarm.model.arm`, the
+foreshortening terms are derived in :func:`_link_body`; the compiled
 kernels of :mod:`flexarm.model.dynamics` compute the same sums and the tests
 hold the two together (and both against an independent SymPy derivation).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
 import numpy as np
@@ -19,7 +20,13 @@ from numpy.typing import NDArray
 
 from .arrays import ArmArrays
 
-__all__ = ["Body", "LagrangianArm", "body_terms"]
+__all__ = [
+    "Body",
+    "LagrangianArm",
+    "body_terms",
+    "christoffel_matrix",
+    "mass_matrix_derivatives",
+]
 
 Body = tuple[NDArray[Any], NDArray[Any], NDArray[Any] | None]
 """``(Jb, Mb, beta)``: body Jacobian (k, n_dof), body inertia (k, k), inertial
@@ -214,3 +221,29 @@ def _link_body(
 
 
 # ---------------------------------------------------------------- dynamics
+
+
+def mass_matrix_derivatives(
+    mass_matrix: Callable[[NDArray[Any]], NDArray[Any]], q: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``dM/dq_k`` for every ``k``, shape ``(n, n, n)`` (k first), by complex-step
+    differentiation of ``mass_matrix`` (exact to rounding) at ``q`` (shape (n,))."""
+    n = q.shape[0]
+    step = 1e-30
+    out = np.empty((n, n, n))
+    for k in range(n):
+        qc = q.astype(complex)
+        qc[k] += 1j * step
+        out[k] = mass_matrix(qc).imag / step
+    return out
+
+
+def christoffel_matrix(dM: NDArray[np.float64], dq: NDArray[Any]) -> NDArray[np.float64]:
+    """The Coriolis matrix from Christoffel symbols of the first kind,
+    ``C_kj = sum_i 1/2 (dM_kj/dq_i + dM_ki/dq_j - dM_ij/dq_k) dq_i``, with
+    ``dM[i, k, j] = dM_kj / dq_i`` (:func:`mass_matrix_derivatives`)."""
+    t1 = np.einsum("ikj,i->kj", dM, dq)
+    t2 = np.einsum("jki,i->kj", dM, dq)
+    t3 = np.einsum("kij,i->kj", dM, dq)
+    out: NDArray[np.float64] = 0.5 * (t1 + t2 - t3)
+    return out
