@@ -172,7 +172,7 @@ def run_exudyn(
     ground = mbs.AddObject(ei.ObjectGround())
     torque_driven = isinstance(drive, TorquePulses)
     n_links = arm.n_links
-    theta0 = np.zeros(n_links) if torque_driven else np.asarray(drive(np.zeros(1))[0])[0]
+    theta0 = np.zeros(n_links) if torque_driven else np.asarray(drive(np.zeros(1))[0]).reshape(-1)
     phi0 = np.cumsum(theta0)  # absolute angles of the straight arm at t = 0
     esym = exu.symbolic
     names = [f"flexarm_theta{i}_{id(mbs)}" for i in range(n_links)]
