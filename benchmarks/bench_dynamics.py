@@ -63,6 +63,7 @@ import numpy as np
 
 from _machine import machine_info, print_machine
 from flexarm import FlexibleArm, Link, MakkarFriction, NonlinearJoint
+from flexarm._compile import njit_runtime_free
 from flexarm.model import dynamics
 
 N_STATES = 1024  # states cycled by the compiled driver (power of two)
@@ -128,7 +129,7 @@ def measure(run_batch: Callable[[], int], repeat: int) -> dict[str, Any]:
     }
 
 
-@dynamics.njit_runtime_free(nogil=True)
+@njit_runtime_free(nogil=True)
 def _driver(Q, DQ, TAU, model, ws, ddq, n_calls):  # pragma: no cover - compiled
     """``n_calls`` kernel calls from compiled code, cycling through the state table."""
     mask = Q.shape[0] - 1
@@ -144,7 +145,7 @@ def _make_chained_driver(kernel: Any) -> Any:
     """A driver of dependent calls of ``kernel``: each call's ``q`` depends on the
     previous call's ``qddot``."""
 
-    @dynamics.njit_runtime_free(nogil=True)
+    @njit_runtime_free(nogil=True)
     def driver(Q, DQ, TAU, model, ws, ddq, qs, n_calls):  # pragma: no cover - compiled
         mask = Q.shape[0] - 1
         acc = 0.0

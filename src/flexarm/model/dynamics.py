@@ -195,22 +195,14 @@ def _assemble_local(q: F64, dq: F64, model: ArmArrays, ws: Workspace) -> None:  
             for c in range(a0, a1):
                 dmd += q[g] * md[g, c] * q[c]
                 dmdd += q[g] * md[g, c] * dq[c]
-        ad2 = ad * ad
         ialpha = ia + dmd
         cxe = cx  # int rho (x - u) dx
-        beta_ux = mass * bx - ad2 * cx - 2.0 * ad * vdd
-        beta_uy = mass * by - ad2 * vd
-        beta_al = -bx * vd + 2.0 * ad * dmdd + cx * by
         stiffening = has_shortening and a1 > a0
         if stiffening:
             # Foreshortening (flexarm.model.foreshortening) into ws.axial: the link's
             # body inertia and inertial force gain the terms of u = 1/2 delta' S delta.
             cxe = link_foreshortening(q, dq, model, a0, a1, cx, ad, bx, by, ws.axial)
-            F = ws.axial
-            ialpha += F[AX_IALPHA, 0]
-            beta_ux += F[AX_BETA, 0]
-            beta_uy += F[AX_BETA, 1]
-            beta_al += F[AX_BETA, 2]
+            ialpha += ws.axial[AX_IALPHA, 0]
         # Rows of P = Mb Jb for (u_x, u_y, alpha) over the prefix [0, s], then the
         # lower triangle of Jb' P there; link i's own modes only see their own rows.
         for c in range(s + 1):
@@ -222,6 +214,7 @@ def _assemble_local(q: F64, dq: F64, model: ArmArrays, ws: Workspace) -> None:  
             u0, u1, ar = U[0, r], U[1, r], A[r]
             for c in range(r + 1):
                 M[r, c] += u0 * P[0, c] + u1 * P[1, c] + ar * P[2, c]
+        ad2 = ad * ad
         for g in range(a0, a1):
             r = s + 1 + g - a0
             vr, wr = v[g], w[g]
@@ -246,6 +239,13 @@ def _assemble_local(q: F64, dq: F64, model: ArmArrays, ws: Workspace) -> None:  
                     M[r, s + 1 + c - a0] += F[AX_Q + k, c - a0]
                 h[r] += F[AX_BETA_MODES, k]
         # Body-frame inertial force at qddot = 0.
+        beta_ux = mass * bx - ad2 * cx - 2.0 * ad * vdd
+        beta_uy = mass * by - ad2 * vd
+        beta_al = -bx * vd + 2.0 * ad * dmdd + cx * by
+        if stiffening:
+            beta_ux += ws.axial[AX_BETA, 0]
+            beta_uy += ws.axial[AX_BETA, 1]
+            beta_al += ws.axial[AX_BETA, 2]
         for r in range(s + 1):
             h[r] += U[0, r] * beta_ux + U[1, r] * beta_uy + A[r] * beta_al
         # Tip of link i, still in link i's frame; A becomes the tip's angle gradient.

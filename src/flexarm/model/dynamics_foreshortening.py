@@ -8,10 +8,10 @@ for every link with modes when the arm has geometric stiffening
 
 from __future__ import annotations
 
-import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
+from .._compile import njit_runtime_free
 from .arrays import (
     AX_BETA,
     AX_BETA_MODES,
@@ -29,7 +29,7 @@ __all__ = ["link_foreshortening"]
 F64 = NDArray[np.float64]
 
 
-@nb.njit(cache=True, nogil=True, inline="always")
+@njit_runtime_free(cache=True, nogil=True)
 def link_foreshortening(
     q: F64,
     dq: F64,
