@@ -227,11 +227,12 @@ class FlexibleArm(RigidKinematics):
           a link turning faster than its first bending frequency diverges
           (:mod:`flexarm.model.foreshortening`).
         * *No hubs: a stiff arm.* With massless joints every loop closed on it
-          is stiff: the paper's collocated Jacobian-transpose PD has its fastest
-          closed-loop pole between about -1,700 and -4,500 rad/s with one mode
-          per link (about -31,700 rad/s with three), so sampled-data control at
-          1-2 kHz is unstable and simulations need small steps. A real arm's hub
-          and motor inertia remove these poles.
+          is stiff: on the default square the paper's collocated
+          Jacobian-transpose PD has its fastest closed-loop pole between about
+          -1,700 and -4,500 rad/s with one mode per link (-31,700 to -86,000 rad/s
+          with three), so sampled-data control at 1-2 kHz is unstable and
+          simulations need small steps. Hub and motor inertia slow these poles
+          (1 kg m**2 at each joint: -450 to -1,200 rad/s with one mode per link).
         """
         n_modes = overrides.pop("n_modes", 1)
         overrides.setdefault("boundary", "clamped-free")

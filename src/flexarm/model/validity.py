@@ -24,7 +24,7 @@ PAPER_MODEL_NOTE = (
     "default square 78 mm off a 63 mm peak (1.2x) against a geometrically exact "
     "reference (Exudyn ANCF), where 3 clamped-mass modes per link with stiffening are "
     "within 0.02 mm; and without hubs every loop closed on it is stiff (collocated PD "
-    "poles down to about -4,500 rad/s with one mode per link, -31,700 with three)."
+    "poles down to about -4,500 rad/s with one mode per link, -86,000 with three)."
 )
 """One line for reports and error messages: what :meth:`flexarm.FlexibleArm.paper`
 leaves out."""

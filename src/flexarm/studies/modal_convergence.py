@@ -266,7 +266,14 @@ def convergence_check(
             inf = np.full(arm.n_links, np.inf)
             cases.append(
                 ConvergenceCase(
-                    variant.n_modes, inf, inf, np.inf, np.inf, variant.n_dof, wall, True
+                    n_modes=variant.n_modes,
+                    deflection_error=inf,
+                    relative_deflection_error=inf,
+                    tip_error=np.inf,
+                    relative_tip_error=np.inf,
+                    n_dof=variant.n_dof,
+                    wall_time_s=wall,
+                    diverged=True,
                 )
             )
             continue
@@ -274,14 +281,14 @@ def convergence_check(
         tip = float(np.linalg.norm(res.tip - ref.tip, axis=1).max())
         cases.append(
             ConvergenceCase(
-                variant.n_modes,
-                err,
-                err / scale,
-                tip,
-                tip / float(scale[-1]),
-                variant.n_dof,
-                wall,
-                False,
+                n_modes=variant.n_modes,
+                deflection_error=err,
+                relative_deflection_error=err / scale,
+                tip_error=tip,
+                relative_tip_error=tip / float(scale[-1]),
+                n_dof=variant.n_dof,
+                wall_time_s=wall,
+                diverged=False,
             )
         )
 
@@ -290,4 +297,11 @@ def convergence_check(
 
     converged = within(cases[-2])
     recommended = next((c.n_modes for c in cases if within(c)), None) if converged else None
-    return ModalConvergence(cases, tol, boundary, converged, recommended, peak)
+    return ModalConvergence(
+        cases=cases,
+        tolerance=tol,
+        boundary=boundary,
+        converged=converged,
+        recommended=recommended,
+        peak_deflection=peak,
+    )

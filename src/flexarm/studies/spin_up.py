@@ -21,8 +21,6 @@ exact ANCF beam within 0.4 % of the peak deflection at Omega = 6 rad/s and
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
@@ -74,7 +72,7 @@ def spin_up(
     duration: float = 20.0,
     dt: float = 0.01,
     substeps: int = 5,
-    **arm_options: Any,
+    geometric_stiffening: bool | None = None,
 ) -> SimulationResult:
     """Kane's spin-up of a one-link arm by prescribed hub motion.
 
@@ -83,9 +81,9 @@ def spin_up(
     omega : float
         Final spin rate, rad/s.
     arm : FlexibleArm, optional
-        A one-link arm (default: :data:`KANE_LINK` with FlexibleArm's defaults,
-        geometric stiffening on; ``arm_options`` override them, e.g.
-        ``geometric_stiffening=False``).
+        A one-link arm (default: :data:`KANE_LINK` with FlexibleArm's defaults).
+    geometric_stiffening : bool, optional
+        For the default arm: with (the default) or without geometric stiffening.
     ramp, duration : float
         Spin-up time and simulated time, s.
     dt : float
@@ -103,11 +101,12 @@ def spin_up(
         ``omega`` = 3.8 rad/s).
     """
     if arm is None:
-        arm = FlexibleArm([KANE_LINK], **arm_options)
-    elif arm_options:
+        stiff = True if geometric_stiffening is None else geometric_stiffening
+        arm = FlexibleArm([KANE_LINK], geometric_stiffening=stiff)
+    elif geometric_stiffening is not None:
         raise InvalidValueError(
-            f"The 'arm' parameter of spin_up comes with its own options. Got {sorted(arm_options)} "
-            "as well instead."
+            "The 'arm' parameter of spin_up comes with its own geometric_stiffening. "
+            f"Got geometric_stiffening={geometric_stiffening!r} as well instead."
         )
     t = np.linspace(0.0, duration, round(duration / dt) + 1)
     return simulate_prescribed(
