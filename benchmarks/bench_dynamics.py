@@ -7,7 +7,8 @@ Run from the repository root::
     python benchmarks/bench_dynamics.py --repeat 7 --calls 2000000
 
 What is timed, per arm (rigid two-link, the paper's arm with one and with two
-modes per link):
+modes per link, with and without flexible joints, and a user-built arm with three
+and five clamped-mass modes per link with and without geometric stiffening):
 
 ``kernel, compiled loop``
     :func:`flexarm.model.dynamics.forward_dynamics` called ``--calls`` times from a
@@ -85,6 +86,20 @@ def make_arms() -> dict[str, FlexibleArm]:
         "paper + nonlinear joints, 1 mode/link (n_dof 6)": FlexibleArm.paper(joints=joints),
         "paper + nonlinear joints, 2 modes/link (n_dof 8)": FlexibleArm.paper(
             n_modes=2, joints=joints
+        ),
+        # the default of an arm a user builds (3 clamped-mass modes, geometric stiffening)
+        # beside the same arm without stiffening, and with 5 modes
+        "3 clamped-mass modes/link (n_dof 8)": FlexibleArm(
+            [Link(LENGTH, EI, RHO, n_modes=3)] * 2, geometric_stiffening=False
+        ),
+        "3 clamped-mass modes/link, stiffening (n_dof 8)": FlexibleArm(
+            [Link(LENGTH, EI, RHO, n_modes=3)] * 2, geometric_stiffening=True
+        ),
+        "5 clamped-mass modes/link (n_dof 12)": FlexibleArm(
+            [Link(LENGTH, EI, RHO, n_modes=5)] * 2, geometric_stiffening=False
+        ),
+        "5 clamped-mass modes/link, stiffening (n_dof 12)": FlexibleArm(
+            [Link(LENGTH, EI, RHO, n_modes=5)] * 2, geometric_stiffening=True
         ),
     }
 

@@ -386,3 +386,24 @@ def test_simulate_prescribed_rejects_bad_input(t, motion, error, match):
 def test_shortening_matrix_rejects_points_off_the_link():
     with pytest.raises(InvalidValueError, match="'x' parameter of shortening_matrix"):
         shortening_matrix(BeamModes(1.0, 1.0, 1.0, 2), [0.5, 1.5])
+
+
+@pytest.mark.parametrize("sensor", ["tip", "point"])
+def test_physical_sensors_see_the_foreshortened_point(sensor):
+    """In closed loop, a physical point sensor on an arm with stiffening measures the
+    point where arm.point_position puts it, foreshortening included (the sensor
+    carries the point's shortening matrix: FlexibleArm.point_basis)."""
+    from flexarm.control.controllers import JointPD
+    from flexarm.control.trajectories import Square
+    from flexarm.sensing.sensors import PointSensor, TipSensor
+    from flexarm.sim import simulate
+
+    arm = fa.FlexibleArm.paper(n_modes=2, boundary="clamped-mass", geometric_stiffening=True)
+    square = Square(center=(5.0, 0.0), side=2.0, time_per_side=0.5)
+    link, d = (1, 4.5) if sensor == "tip" else (1, 0.5)
+    sens = TipSensor() if sensor == "tip" else PointSensor(link, d)
+    res = simulate(arm, JointPD(kp=2000.0, kd=300.0), square, sensor=sens, duration=0.5)
+    expected = arm.point_position(res.q, link, d)
+    np.testing.assert_allclose(res.measurement[:, 4:6], expected, rtol=0, atol=1e-12)
+    linear = arm.with_modes(2, geometric_stiffening=False).point_position(res.q, link, d)
+    assert np.abs(expected - linear).max() > 1e-9  # the foreshortening is in the signal

@@ -55,7 +55,8 @@ class SensorArrays(NamedTuple):
 
     link: int64 (1,) — link of the sensed point, -1 for the joint encoders.
     distance: (1,) — distance of the point along its link, m.
-    phi: (n_modes of link,) — mode shapes at the point.
+    phi: (n_modes of link,) — mode shapes at the point (then, with geometric stiffening,
+         the link's shortening matrix there: FlexibleArm.point_basis).
     levers: (n_links,) — lever lengths of the rigid kinematics that turn the
         encoder angles into the sensed position (joint encoders), m.
     delay_steps: int64 (1,) — exact delay in substeps (0: none unless Padé).
@@ -97,7 +98,7 @@ def sensor_arrays(
         Link of the sensed point (0-based), or -1 for the joint encoders.
     distance : float
         Distance of the point along its link, m (0 for the encoders).
-    phi : ndarray, shape (n_modes of link,)
+    phi : ndarray, shape (n_modes of link,) or (n_modes + n_modes**2,)
         Mode shapes at the point (empty for the encoders).
     levers : ndarray, shape (n_links,)
         Lever lengths of the rigid kinematics of the encoder angles, m.
