@@ -295,12 +295,13 @@ def run(calls: int, repeat: int, log: Callable[[str], None]) -> dict[str, Any]:
         rows = _py_rows(states)
         model, ws, ddq = arm.arrays, dynamics.make_workspace(arm.n_dof), np.empty(arm.n_dof)
 
-        # the compiled kernel agrees with the NumPy reference on these states
+        # the compiled kernel agrees with the NumPy reference on these states, norm-wise
+        # (a small component of a large q̈ carries the rounding of the large ones)
         err = 0.0
         for q0, dq0, tau0 in rows[:16]:
             dynamics.forward_dynamics(q0, dq0, tau0, model, ws, ddq)
             ref = arm.forward_dynamics(q0, dq0, tau0, backend="numpy")
-            err = max(err, float(np.max(np.abs(ddq - ref) / (1.0 + np.abs(ref)))))
+            err = max(err, float(np.max(np.abs(ddq - ref)) / max(1.0, np.max(np.abs(ref)))))
         out["checks"][f"{label}: kernel vs numpy (max rel err)"] = err
 
         def kernel_call(q, dq, tau, model=model, ws=ws, ddq=ddq):
