@@ -121,8 +121,10 @@ class FlexibleArm(RigidKinematics):
         Point mass at the last tip, kg (>= 0).
     payload_inertia : float
         Rotary inertia of the payload about the tip, kg m**2 (>= 0).
-    boundary : {"clamped-free", "clamped-mass"}
-        Boundary conditions of the assumed modes (module docstring).
+    boundary : {"clamped-mass", "clamped-free"}
+        Boundary conditions of the assumed modes (module docstring); default
+        ``"clamped-mass"``, which converges with a few modes where the paper's
+        ``"clamped-free"`` does not (README, "How many modes").
     joints : sequence of LinearJoint or NonlinearJoint, optional
         One flexible joint per link (None: rigid joints). Adds the motor angles
         to ``q``.
@@ -135,6 +137,12 @@ class FlexibleArm(RigidKinematics):
     rotor_coupling : bool
         Whether a rotor's kinetic energy includes its carrier link's rotation
         (the paper's ``S``; default True).
+    geometric_stiffening : bool
+        Whether the kinematic map holds the foreshortening of bent links
+        (:mod:`flexarm.model.foreshortening`) and the dynamics the centrifugal
+        stiffening it brings; default True. False is the paper's linear
+        kinematics, which diverge once a link turns faster than its first
+        bending frequency.
 
     Examples
     --------
@@ -143,6 +151,9 @@ class FlexibleArm(RigidKinematics):
     4
     >>> round(float(arm.link_frequencies[0][0]), 3)
     12.281
+    >>> user = FlexibleArm([Link(4.5, 1676.0, 0.335)] * 2)   # the defaults
+    >>> user.n_modes, user.boundary, user.geometric_stiffening
+    ((3, 3), 'clamped-mass', True)
     """
 
     links: Sequence[Link]
