@@ -37,16 +37,21 @@ RANK = {name: k for k, names in enumerate(LAYERS) for name in names}
 # package's __init__ when that is lower still). Packages not listed are unordered.
 WITHIN: dict[str, list[str]] = {
     "model": [
+        "validity",
         "modes",
         "link",
         "joints",
         "arrays",
         "plant",
+        "foreshortening",
         "packing",
         "kinematics",
         "lagrangian",
+        "dynamics_foreshortening",
+        "dynamics_points",
         "dynamics_two_links",
         "dynamics",
+        "prescribed",
         "arm",
     ],
     "sensing": ["delays", "sensors"],

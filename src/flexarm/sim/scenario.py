@@ -76,6 +76,7 @@ _ARM_PASSTHROUGH = (
     "mode_amplitude",
     "joint_friction",
     "rotor_coupling",
+    "geometric_stiffening",
 )
 _ARM_KEYS = ("preset", "n_modes", "links", "joints", *_ARM_PASSTHROUGH)
 

@@ -17,16 +17,17 @@ builds, with the same names and SI units::
     preset = "paper"          # two 4.5 m links (FlexibleArm.paper); or omit it and
                               # give [[arm.links]] instead (not both)
     n_modes = 1               # modes per link of the preset only
-    boundary = "clamped-free" # or "clamped-mass"
+    boundary = "clamped-free" # or "clamped-mass" (default with [[arm.links]])
     payload_mass = 0.0        # kg
     payload_inertia = 0.0     # kg m^2
-    # also: mode_normalization, mode_amplitude, joint_friction, rotor_coupling
+    # also: mode_normalization, mode_amplitude, joint_friction, rotor_coupling,
+    # geometric_stiffening (false for the preset, true with [[arm.links]])
 
     # [[arm.links]]           # one table per link, base outwards (Link)
     # length = 4.5            # m            (required)
     # flexural_rigidity = 1676.0   # N m^2   (required)
     # linear_density = 0.335  # kg/m         (required)
-    # n_modes = 1, hub_mass = 0.0 (kg), hub_inertia = 0.0 (kg m^2), modal_damping = 0.0
+    # n_modes = 3, hub_mass = 0.0 (kg), hub_inertia = 0.0 (kg m^2), modal_damping = 0.0
 
     # [arm.joints]            # the same joint at every link (default: rigid joints)
     # kind = "linear"         # "rigid" | "linear" (LinearJoint.default()) |
