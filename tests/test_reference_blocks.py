@@ -19,7 +19,7 @@ from flexarm.control.shapers import zv
 from flexarm.control.signals import r_acceleration, r_position, r_velocity
 from flexarm.control.trajectories import _COMPILED_FROM, Circle, Line, Square, Waypoints
 from flexarm.errors import InvalidValueError
-from flexarm.sim.reference_kernels import OK, SINGULAR, UNREACHABLE, joint_path_rows
+from flexarm.sim._reference_kernels import OK, SINGULAR, UNREACHABLE, joint_path_rows
 from flexarm.sim.references import BLOCK, ReferencePipeline, joint_path
 
 

@@ -84,8 +84,8 @@ def test_shared_runs_are_run_once(study):
     # encoders are the same); the delay study: "seed" is the matrix, "none" and
     # "dispersive" add the 4 noncollocated runs each; the ks study (ks 0 and 10, two
     # laws): 4 settings with the encoders (shared by the models) and 4 settings x 2
-    # noncollocated sensors x 2 models
-    assert study.settings["runs"] == (6 + 4) + (4 + 4) + (4 + 16)
+    # noncollocated sensors x 2 models; the matrix again on the converged arm (6 + 4)
+    assert study.settings["runs"] == (6 + 4) + (4 + 4) + (4 + 16) + (6 + 4)
 
 
 def test_run_matrix_lists_and_deduplicates():

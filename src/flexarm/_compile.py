@@ -7,7 +7,7 @@ from typing import Any, TypeVar
 
 import numba as nb
 
-__all__ = ["RUNTIME_FREE", "njit_runtime_free"]
+__all__ = ["RUNTIME_FREE", "compiled_as", "njit_runtime_free"]
 
 
 def _runtime_free_options() -> dict[str, bool]:
@@ -35,3 +35,24 @@ def njit_runtime_free(**options: Any) -> Callable[[_Fn], _Fn]:
     this Numba supports it (for hot functions that allocate nothing)."""
     decorator: Callable[[_Fn], _Fn] = nb.njit(**options, **RUNTIME_FREE)  # type: ignore[call-overload]
     return decorator
+
+
+def compiled_as(public: Callable[..., Any]) -> Callable[[_Fn], _Fn]:
+    """Register the decorated function as ``public``'s implementation inside compiled
+    code (a Numba ``overload``, cached and without the GIL; not inlined, which links
+    the kernel into a user's function in about a second instead of re-optimising it
+    there for ten).
+
+    The pattern of flexarm's public kernels: ``public`` is a Python function that
+    checks its arguments and calls a private ``@njit`` kernel; the decorated
+    function returns that kernel for compiled callers, who get it unchecked::
+
+        @compiled_as(forward_dynamics)
+        def _(q, dq, tau, model, ws, ddq):
+            return lambda q, dq, tau, model, ws, ddq: _forward_dynamics(q, dq, tau, model, ws, ddq)
+    """
+    from numba.extending import overload
+
+    options: Any = {"cache": True, "nogil": True}  # numba's stub lists no "cache"
+    register: Callable[[_Fn], _Fn] = overload(public, jit_options=options)
+    return register

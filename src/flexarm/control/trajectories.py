@@ -112,11 +112,11 @@ def _piecewise(t: _F, knot_t: _F, knot_p: _F, quintic: bool) -> _Triple:
     ``knot_t`` (k,) strictly increasing, s; ``knot_p`` (k, 2), m. A repeated
     point is a dwell. Outside ``[knot_t[0], knot_t[-1])`` the path is at rest.
     Long time grids go to the compiled twin
-    (:func:`flexarm.control.path_kernels.piecewise_path`), short ones stay in
+    (:func:`flexarm.control._path_kernels.piecewise_path`), short ones stay in
     NumPy (no compilation or cache loading for a few points).
     """
     if t.shape[0] >= _COMPILED_FROM:
-        from .path_kernels import piecewise_path
+        from ._path_kernels import piecewise_path
 
         out = np.empty((3, t.shape[0], 2))
         piecewise_path(

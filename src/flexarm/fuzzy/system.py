@@ -223,7 +223,7 @@ class FuzzySystem:
     def _call_compiled(self, xs: list[FloatArray]) -> FloatArray:
         """The compiled kernel on the flattened inputs; large inputs in chunks on
         every core (the kernel releases the GIL)."""
-        from .compiled import evaluate_many
+        from .compiled import _evaluate_many as evaluate_many  # the system built it: no checks
 
         x = np.ascontiguousarray(np.stack([a.ravel() for a in xs], axis=1), dtype=np.float64)
         system = self._packed

@@ -25,6 +25,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
+from .._compile import compiled_as
 from .arrays import (
     AX_BETA,
     AX_BETA_MODES,
@@ -56,10 +57,13 @@ from .arrays import (
 from .dynamics_foreshortening import link_foreshortening
 from .dynamics_points import point_kinematics
 from .dynamics_two_links import (
+    _forward_dynamics_two_links_one_mode,
+    _is_two_links_one_mode,
     accelerations_two_links_one_mode,
     forward_dynamics_two_links_one_mode,
     is_two_links_one_mode,
 )
+from .kernel_checks import check_model, check_state, check_vector, check_workspace
 
 __all__ = [
     "ArmArrays",
@@ -80,7 +84,9 @@ F64 = NDArray[np.float64]
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def joint_forces(q: F64, dq: F64, tau: F64, model: ArmArrays, rhs: F64) -> None:  # pragma: no cover
+def _joint_forces(
+    q: F64, dq: F64, tau: F64, model: ArmArrays, rhs: F64
+) -> None:  # pragma: no cover
     """Add the flexible joints' generalised forces to ``rhs``.
 
     Spring torque ``tau_s(q_m - q)`` on the link angle and its reaction on the
@@ -352,7 +358,7 @@ def local_order(mode_start: NDArray[np.int64], n_dof: int) -> NDArray[np.int64]:
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def mass_and_bias(
+def _mass_and_bias(
     q: F64, dq: F64, model: ArmArrays, ws: Workspace
 ) -> None:  # pragma: no cover - compiled
     """Fill ``ws.mass`` with ``M(q)`` and ``ws.bias`` with ``C(q, dq) dq``.
@@ -381,7 +387,7 @@ def mass_and_bias(
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def forward_dynamics_general(
+def _forward_dynamics_general(
     q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
 ) -> None:  # pragma: no cover - compiled
     """:func:`forward_dynamics` for any structure (links, modes, joints).
@@ -397,7 +403,7 @@ def forward_dynamics_general(
     for r in range(n):
         rhs[r] = -model.stiffness[r] * q[r] - model.damping[r] * dq[r]
     if model.joint.shape[0] > 0:
-        joint_forces(q, dq, tau, model, rhs)
+        _joint_forces(q, dq, tau, model, rhs)
     else:
         for r in range(tau.shape[0]):
             rhs[r] += tau[r]
@@ -423,7 +429,7 @@ def forward_dynamics_general(
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def forward_dynamics(
+def _forward_dynamics(
     q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
 ) -> None:  # pragma: no cover - compiled
     """``ddq = M(q)^-1 (B tau - C(q, dq) dq - K q - D dq + joint forces)``, into ``ddq``.
@@ -445,7 +451,89 @@ def forward_dynamics(
     ddq : ndarray, shape (n_dof,)
         Output accelerations.
     """
-    if is_two_links_one_mode(model):
-        forward_dynamics_two_links_one_mode(q, dq, tau, model, ddq)
+    if _is_two_links_one_mode(model):
+        _forward_dynamics_two_links_one_mode(q, dq, tau, model, ddq)
     else:
-        forward_dynamics_general(q, dq, tau, model, ws, ddq)
+        _forward_dynamics_general(q, dq, tau, model, ws, ddq)
+
+
+# ------------------------------------------------------------------ checked public faces
+# From Python each name checks its arguments first (an output shorter than n_dof
+# would otherwise be written past its end); inside compiled code (the simulator's
+# loops, a user's own) the same name is the kernel itself, through an overload.
+def forward_dynamics(q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64) -> None:
+    """``ddq = M(q)^-1 (B tau - C(q, dq) dq - K q - D dq + joint forces)``, into ``ddq``
+    (:func:`_forward_dynamics`; the parameters are checked when called from Python).
+
+    Parameters
+    ----------
+    q, dq : ndarray, shape (n_dof,)
+        Coordinates and rates, float64, C-contiguous.
+    tau : ndarray, shape (n_links,)
+        Joint (motor) torques, N m.
+    model : ArmArrays
+        :attr:`flexarm.FlexibleArm.arrays`.
+    ws : Workspace
+        :func:`make_workspace` ``(n_dof)`` (overwritten).
+    ddq : ndarray, shape (n_dof,)
+        Output accelerations (writable).
+
+    Raises
+    ------
+    InvalidTypeError, InvalidValueError
+        Naming the argument of the wrong type, dtype, layout or shape.
+    """
+    owner = "forward_dynamics"
+    _, n = check_state(q, dq, tau, model, owner)
+    check_workspace(ws, n, owner)
+    check_vector(ddq, "ddq", owner, (n,), writable=True)
+    _forward_dynamics(q, dq, tau, model, ws, ddq)
+
+
+def forward_dynamics_general(
+    q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
+) -> None:
+    """:func:`forward_dynamics` by the general kernel for any structure (checked)."""
+    owner = "forward_dynamics_general"
+    _, n = check_state(q, dq, tau, model, owner)
+    check_workspace(ws, n, owner)
+    check_vector(ddq, "ddq", owner, (n,), writable=True)
+    _forward_dynamics_general(q, dq, tau, model, ws, ddq)
+
+
+def mass_and_bias(q: F64, dq: F64, model: ArmArrays, ws: Workspace) -> None:
+    """Fill ``ws.mass`` with ``M(q)`` and ``ws.bias`` with ``C(q, dq) dq`` (checked)."""
+    owner = "mass_and_bias"
+    _, n = check_model(model, owner)
+    check_vector(q, "q", owner, (n,))
+    check_vector(dq, "dq", owner, (n,))
+    check_workspace(ws, n, owner)
+    _mass_and_bias(q, dq, model, ws)
+
+
+def joint_forces(q: F64, dq: F64, tau: F64, model: ArmArrays, rhs: F64) -> None:
+    """Add the flexible joints' generalised forces to ``rhs`` (checked)."""
+    owner = "joint_forces"
+    _, n = check_state(q, dq, tau, model, owner)
+    check_vector(rhs, "rhs", owner, (n,), writable=True)
+    _joint_forces(q, dq, tau, model, rhs)
+
+
+@compiled_as(forward_dynamics)
+def _forward_dynamics_compiled(q, dq, tau, model, ws, ddq):  # type: ignore[no-untyped-def]
+    return lambda q, dq, tau, model, ws, ddq: _forward_dynamics(q, dq, tau, model, ws, ddq)
+
+
+@compiled_as(forward_dynamics_general)
+def _forward_dynamics_general_compiled(q, dq, tau, model, ws, ddq):  # type: ignore[no-untyped-def]
+    return lambda q, dq, tau, model, ws, ddq: _forward_dynamics_general(q, dq, tau, model, ws, ddq)
+
+
+@compiled_as(mass_and_bias)
+def _mass_and_bias_compiled(q, dq, model, ws):  # type: ignore[no-untyped-def]
+    return lambda q, dq, model, ws: _mass_and_bias(q, dq, model, ws)
+
+
+@compiled_as(joint_forces)
+def _joint_forces_compiled(q, dq, tau, model, rhs):  # type: ignore[no-untyped-def]
+    return lambda q, dq, tau, model, rhs: _joint_forces(q, dq, tau, model, rhs)

@@ -9,8 +9,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .._compile import njit_runtime_free
+from .._compile import compiled_as, njit_runtime_free
+from ..errors import InvalidValueError
 from .arrays import LEN, ArmArrays
+from .kernel_checks import check_model, check_vector
 
 __all__ = ["point_kinematics"]
 
@@ -18,7 +20,7 @@ F64 = NDArray[np.float64]
 
 
 @njit_runtime_free(cache=True, nogil=True)
-def point_kinematics(
+def _point_kinematics(
     q: F64, dq: F64, model: ArmArrays, link: int, distance: float, phi: F64, out: F64
 ) -> None:  # pragma: no cover - compiled
     """Position and velocity of a point on a link, deflection included.
@@ -99,3 +101,36 @@ def point_kinematics(
     out[1] = py
     out[2] = vx
     out[3] = vy
+
+
+def point_kinematics(
+    q: F64, dq: F64, model: ArmArrays, link: int, distance: float, phi: F64, out: F64
+) -> None:
+    """:func:`_point_kinematics` with its arguments checked (from Python; inside
+    compiled code the kernel itself)."""
+    owner = "point_kinematics"
+    n_links, n = check_model(model, owner)
+    check_vector(q, "q", owner, (n,))
+    check_vector(dq, "dq", owner, (n,))
+    if not isinstance(link, int | np.integer) or not 0 <= int(link) < n_links:
+        raise InvalidValueError(
+            f"The 'link' parameter of {owner} must be an integer in [0, {n_links}). "
+            f"Got {link!r} instead."
+        )
+    modes = int(model.mode_start[int(link) + 1] - model.mode_start[int(link)])
+    phi_arr = np.asarray(phi)
+    if phi_arr.ndim != 1 or phi_arr.shape[0] not in (modes, modes + modes * modes):
+        raise InvalidValueError(
+            f"The 'phi' parameter of {owner} must be of shape ({modes},) or "
+            f"({modes + modes * modes},) for link {link}. Got shape {phi_arr.shape} instead."
+        )
+    check_vector(phi, "phi", owner, (phi_arr.shape[0],))
+    check_vector(out, "out", owner, (4,), writable=True)
+    _point_kinematics(q, dq, model, int(link), float(distance), phi, out)
+
+
+@compiled_as(point_kinematics)
+def _point_kinematics_compiled(q, dq, model, link, distance, phi, out):  # type: ignore[no-untyped-def]
+    return lambda q, dq, model, link, distance, phi, out: _point_kinematics(
+        q, dq, model, link, distance, phi, out
+    )

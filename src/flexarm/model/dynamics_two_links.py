@@ -13,7 +13,10 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
+from .._compile import compiled_as
+from ..errors import InvalidValueError
 from .arrays import HUB_MASS, INERTIA, LEN, MASS, STATIC, ArmArrays
+from .kernel_checks import check_model, check_state, check_vector
 
 __all__ = [
     "accelerations_two_links_one_mode",
@@ -25,7 +28,7 @@ F64 = NDArray[np.float64]
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def is_two_links_one_mode(model: ArmArrays) -> bool:  # pragma: no cover - compiled
+def _is_two_links_one_mode(model: ArmArrays) -> bool:  # pragma: no cover - compiled
     """Whether :func:`forward_dynamics_two_links_one_mode` applies: two links with
     one mode each (``q = (theta1, theta2, delta1, delta2)``), rigid joints and no
     geometric stiffening."""
@@ -41,7 +44,7 @@ def is_two_links_one_mode(model: ArmArrays) -> bool:  # pragma: no cover - compi
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def accelerations_two_links_one_mode(
+def _accelerations_two_links_one_mode(
     a1: float,
     a2: float,
     d1: float,
@@ -198,10 +201,91 @@ def accelerations_two_links_one_mode(
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def forward_dynamics_two_links_one_mode(
+def _forward_dynamics_two_links_one_mode(
     q: F64, dq: F64, tau: F64, model: ArmArrays, ddq: F64
 ) -> None:  # pragma: no cover - compiled
     """:func:`accelerations_two_links_one_mode` on arrays: ``ddq`` from ``q, dq, tau``."""
-    ddq[0], ddq[1], ddq[2], ddq[3] = accelerations_two_links_one_mode(
+    ddq[0], ddq[1], ddq[2], ddq[3] = _accelerations_two_links_one_mode(
         q[0], q[1], q[2], q[3], dq[0], dq[1], dq[2], dq[3], tau[0], tau[1], model
+    )
+
+
+# ------------------------------------------------------------------ checked public faces
+# From Python each name checks its arguments first (a wrong shape would otherwise
+# write past an array's end); inside compiled code it is the kernel itself.
+def is_two_links_one_mode(model: ArmArrays) -> bool:
+    """Whether ``model`` has two links with one mode each and rigid joints (the
+    paper's structure, which the scalar kernel handles)."""
+    check_model(model, "is_two_links_one_mode")
+    return bool(_is_two_links_one_mode(model))
+
+
+def accelerations_two_links_one_mode(
+    a1: float,
+    a2: float,
+    d1: float,
+    d2: float,
+    da1: float,
+    da2: float,
+    dd1: float,
+    dd2: float,
+    t1: float,
+    t2: float,
+    model: ArmArrays,
+) -> tuple[float, float, float, float]:
+    """:func:`_accelerations_two_links_one_mode`, its model checked: the paper's
+    structure only."""
+    _check_paper_structure(model, "accelerations_two_links_one_mode")
+    out: tuple[float, float, float, float] = _accelerations_two_links_one_mode(
+        float(a1),
+        float(a2),
+        float(d1),
+        float(d2),
+        float(da1),
+        float(da2),
+        float(dd1),
+        float(dd2),
+        float(t1),
+        float(t2),
+        model,
+    )
+    return out
+
+
+def forward_dynamics_two_links_one_mode(
+    q: F64, dq: F64, tau: F64, model: ArmArrays, ddq: F64
+) -> None:
+    """``ddq`` from ``q, dq, tau`` for the paper's structure, arguments checked."""
+    owner = "forward_dynamics_two_links_one_mode"
+    _check_paper_structure(model, owner)
+    check_state(q, dq, tau, model, owner)
+    check_vector(ddq, "ddq", owner, (4,), writable=True)
+    _forward_dynamics_two_links_one_mode(q, dq, tau, model, ddq)
+
+
+def _check_paper_structure(model: ArmArrays, owner: str) -> None:
+    n_links, n = check_model(model, owner)
+    if not (n_links == 2 and n == 4):
+        raise InvalidValueError(
+            f"The 'model' parameter of {owner} must have two links with one mode each and "
+            f"rigid joints. Got {n_links} links and {n} coordinates instead."
+        )
+
+
+@compiled_as(is_two_links_one_mode)
+def _is_two_links_one_mode_compiled(model):  # type: ignore[no-untyped-def]
+    return lambda model: _is_two_links_one_mode(model)
+
+
+@compiled_as(accelerations_two_links_one_mode)
+def _accelerations_compiled(a1, a2, d1, d2, da1, da2, dd1, dd2, t1, t2, model):  # type: ignore[no-untyped-def]
+    return lambda a1, a2, d1, d2, da1, da2, dd1, dd2, t1, t2, model: (
+        _accelerations_two_links_one_mode(a1, a2, d1, d2, da1, da2, dd1, dd2, t1, t2, model)
+    )
+
+
+@compiled_as(forward_dynamics_two_links_one_mode)
+def _forward_dynamics_two_links_compiled(q, dq, tau, model, ddq):  # type: ignore[no-untyped-def]
+    return lambda q, dq, tau, model, ddq: _forward_dynamics_two_links_one_mode(
+        q, dq, tau, model, ddq
     )

@@ -14,9 +14,11 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from .._compile import njit_runtime_free
+from .._compile import compiled_as, njit_runtime_free
+from ..errors import InvalidValueError
 from ..model.arrays import ArmArrays, Workspace
 from ..model.dynamics import accelerations_two_links_one_mode, forward_dynamics_general
+from ..model.kernel_checks import check_model, check_vector, check_workspace
 
 __all__ = ["DIVERGENCE_RATE", "diverged", "rk4_step", "rk4_step_two_links_one_mode"]
 
@@ -27,7 +29,7 @@ DIVERGENCE_RATE = 1e12
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def diverged(q: F64, dq: F64, model: ArmArrays, max_deflection: F64) -> bool:  # pragma: no cover
+def _diverged(q: F64, dq: F64, model: ArmArrays, max_deflection: F64) -> bool:  # pragma: no cover
     """Whether the state is non-finite, a rate exceeds :data:`DIVERGENCE_RATE`, or a
     link's tip deflection exceeds ``max_deflection`` (m, shape (n_links,))."""
     for r in range(q.shape[0]):
@@ -91,7 +93,7 @@ def _rk4_update(q: F64, dq: F64, h: float, s: F64) -> None:  # pragma: no cover 
 
 
 @njit_runtime_free(cache=True, nogil=True)
-def rk4_step(
+def _rk4_step(
     q: F64,
     dq: F64,
     tau0: F64,
@@ -120,7 +122,7 @@ def rk4_step(
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def rk4_step_two_links_one_mode(
+def _rk4_step_two_links_one_mode(
     q: F64, dq: F64, tau0: F64, tau_mid: F64, tau1: F64, h: float, model: ArmArrays
 ) -> None:  # pragma: no cover - compiled
     """:func:`rk4_step` for two links with one mode each and rigid joints, in scalars
@@ -159,3 +161,78 @@ def rk4_step_two_links_one_mode(
     c6 = h / 6.0
     q[0], q[1], q[2], q[3] = q0 + c6 * sv0, q1 + c6 * sv1, q2 + c6 * sv2, q3 + c6 * sv3
     dq[0], dq[1], dq[2], dq[3] = v0 + c6 * sa0, v1 + c6 * sa1, v2 + c6 * sa2, v3 + c6 * sa3
+
+
+# ------------------------------------------------------------------ checked public faces
+# From Python each name checks its arguments first; inside compiled code (the
+# loops) it is the kernel itself.
+def _check_step(q: F64, dq: F64, taus: tuple[F64, F64, F64], model: ArmArrays, owner: str) -> int:
+    n_links, n = check_model(model, owner)
+    check_vector(q, "q", owner, (n,), writable=True)
+    check_vector(dq, "dq", owner, (n,), writable=True)
+    for name, tau in zip(("tau0", "tau_mid", "tau1"), taus, strict=True):
+        check_vector(tau, name, owner, (n_links,))
+    return n
+
+
+def rk4_step(
+    q: F64,
+    dq: F64,
+    tau0: F64,
+    tau_mid: F64,
+    tau1: F64,
+    h: float,
+    model: ArmArrays,
+    ws: Workspace,
+    s: F64,
+) -> None:
+    """One classical RK4 step in place (:func:`_rk4_step`), arguments checked."""
+    owner = "rk4_step"
+    n = _check_step(q, dq, (tau0, tau_mid, tau1), model, owner)
+    check_workspace(ws, n, owner)
+    check_vector(s, "s", owner, (6, n), writable=True)
+    _rk4_step(q, dq, tau0, tau_mid, tau1, float(h), model, ws, s)
+
+
+def rk4_step_two_links_one_mode(
+    q: F64, dq: F64, tau0: F64, tau_mid: F64, tau1: F64, h: float, model: ArmArrays
+) -> None:
+    """:func:`rk4_step` for the paper's structure (:func:`_rk4_step_two_links_one_mode`),
+    arguments checked."""
+    owner = "rk4_step_two_links_one_mode"
+    n = _check_step(q, dq, (tau0, tau_mid, tau1), model, owner)
+    if n != 4 or model.joint.shape[0] or model.mode_start.shape[0] != 3:
+        raise InvalidValueError(
+            f"The 'model' parameter of {owner} must have two links with one mode each and "
+            "rigid joints. Got another structure instead."
+        )
+    _rk4_step_two_links_one_mode(q, dq, tau0, tau_mid, tau1, float(h), model)
+
+
+def diverged(q: F64, dq: F64, model: ArmArrays, max_deflection: F64) -> bool:
+    """Whether the state diverged (:func:`_diverged`), arguments checked."""
+    owner = "diverged"
+    n_links, n = check_model(model, owner)
+    check_vector(q, "q", owner, (n,))
+    check_vector(dq, "dq", owner, (n,))
+    check_vector(max_deflection, "max_deflection", owner, (n_links,))
+    return bool(_diverged(q, dq, model, max_deflection))
+
+
+@compiled_as(rk4_step)
+def _rk4_step_compiled(q, dq, tau0, tau_mid, tau1, h, model, ws, s):  # type: ignore[no-untyped-def]
+    return lambda q, dq, tau0, tau_mid, tau1, h, model, ws, s: _rk4_step(
+        q, dq, tau0, tau_mid, tau1, h, model, ws, s
+    )
+
+
+@compiled_as(rk4_step_two_links_one_mode)
+def _rk4_step_two_links_compiled(q, dq, tau0, tau_mid, tau1, h, model):  # type: ignore[no-untyped-def]
+    return lambda q, dq, tau0, tau_mid, tau1, h, model: _rk4_step_two_links_one_mode(
+        q, dq, tau0, tau_mid, tau1, h, model
+    )
+
+
+@compiled_as(diverged)
+def _diverged_compiled(q, dq, model, max_deflection):  # type: ignore[no-untyped-def]
+    return lambda q, dq, model, max_deflection: _diverged(q, dq, model, max_deflection)

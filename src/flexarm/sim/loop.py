@@ -25,11 +25,20 @@ import numpy as np
 from numba.core.ccallback import CFunc
 from numpy.typing import NDArray
 
-from .._compile import njit_runtime_free
-from ..control.signals import r_feedforward, y_angles, y_modes, y_point, y_rates
+from .._compile import compiled_as, njit_runtime_free
+from ..control.signals import (
+    measurement_size,
+    r_feedforward,
+    reference_size,
+    y_angles,
+    y_modes,
+    y_point,
+    y_rates,
+)
 from ..errors import InvalidValueError
 from ..model.arrays import ArmArrays, Workspace, make_workspace
 from ..model.dynamics import is_two_links_one_mode, point_kinematics
+from ..model.kernel_checks import check_model, check_vector, check_workspace
 from .integrator import diverged, rk4_step, rk4_step_two_links_one_mode
 
 __all__ = [
@@ -209,7 +218,7 @@ def _collocated(q: F64, dq: F64, model: ArmArrays, i: int, n_links: int) -> tupl
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> None:
+def _sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> None:
     """The raw (true, undelayed) sensed signal: the encoder angles then rates, or
     the point's position then velocity (deflected, or the paper's rigid
     kinematics of the encoder angles).
@@ -252,7 +261,7 @@ def sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> 
 def prime_delay_line(model: ArmArrays, sensor: SensorArrays, state: LoopState) -> None:
     """Start the delay line at steady state on the initial sensed signal."""
     raw = np.zeros(state.buffer.shape[1])
-    sense(state.q, state.dq, model, sensor, raw)
+    _sense(state.q, state.dq, model, sensor, raw)
     state.buffer[:] = raw
     order = sensor.pade_ad.shape[0]
     if order:
@@ -262,7 +271,7 @@ def prime_delay_line(model: ArmArrays, sensor: SensorArrays, state: LoopState) -
 
 
 @njit_runtime_free(cache=True, nogil=True)
-def run(
+def _run(
     model: ArmArrays,
     control: CFunc,  # see flexarm.control.controllers.CONTROL_SIGNATURE
     params: F64,
@@ -320,7 +329,7 @@ def run(
     o_ff = r_feedforward(n_links)
     for k in range(k0, k1):
         # ---- measure: the delayed sensed signal, then noise and quantisation
-        sense(q, dq, model, sensor, raw)
+        _sense(q, dq, model, sensor, raw)
         cur = state.cursor[0]
         if n_buf > 1:
             src = cur - (n_buf - 1)
@@ -416,7 +425,7 @@ def run(
         # ---- integrate to t_{k+1}
         for _ in range(substeps):
             if order > 0:  # Padé filter: x <- Ad x + Bd u over this substep
-                sense(q, dq, model, sensor, raw)
+                _sense(q, dq, model, sensor, raw)
                 for c in range(n_ch):
                     for j in range(order):
                         acc = sensor.pade_bd[j] * raw[c]
@@ -431,10 +440,168 @@ def run(
                 rk4_step(q, dq, tau, tau, tau, h, model, ws, state.scratch)
             state.cursor[0] += 1
             if n_buf > 1:
-                sense(q, dq, model, sensor, raw)
+                _sense(q, dq, model, sensor, raw)
                 slot = state.cursor[0] % n_buf
                 for c in range(n_ch):
                     state.buffer[slot, c] = raw[c]
             if diverged(q, dq, model, max_deflection):
                 return DIVERGED, k
     return OK, k1
+
+
+# ------------------------------------------------------------------ checked public faces
+# From Python, run and sense check every array they will index (a short output
+# would be written past its end); inside compiled code they are the kernels.
+def _check_sensor(sensor: SensorArrays, model: ArmArrays, owner: str) -> tuple[int, int]:
+    """``(n_channels, pade order)`` of ``sensor`` for ``model``."""
+    if not isinstance(sensor, SensorArrays):
+        raise InvalidValueError(
+            f"The 'sensor' parameter of {owner} must be a SensorArrays (sensor_arrays)."
+        )
+    n_links, _ = check_model(model, owner)
+    for name in ("link", "rigid", "delay_steps"):
+        check_vector(getattr(sensor, name), f"sensor.{name}", owner, (1,), dtype=np.int64)
+    check_vector(sensor.distance, "sensor.distance", owner, (1,))
+    link = int(sensor.link[0])
+    if not -1 <= link < n_links:
+        raise InvalidValueError(
+            f"The 'sensor.link' parameter of {owner} must be -1 (encoders) or a link of the "
+            f"model (< {n_links}). Got {link} instead."
+        )
+    n_ch = 2 * n_links if link < 0 else 4
+    if link >= 0:
+        modes = int(model.mode_start[link + 1] - model.mode_start[link])
+        if sensor.phi.shape not in ((modes,), (modes + modes * modes,)):
+            raise InvalidValueError(
+                f"The 'sensor.phi' parameter of {owner} must fit link {link}'s {modes} modes. "
+                f"Got shape {sensor.phi.shape} instead."
+            )
+    check_vector(sensor.phi, "sensor.phi", owner, sensor.phi.shape)
+    check_vector(sensor.levers, "sensor.levers", owner, (n_links,))
+    p = sensor.pade_ad.shape[0] if sensor.pade_ad.ndim == 2 else -1
+    check_vector(sensor.pade_ad, "sensor.pade_ad", owner, (p, p))
+    check_vector(sensor.pade_bd, "sensor.pade_bd", owner, (p,))
+    check_vector(sensor.pade_cd, "sensor.pade_cd", owner, (p,))
+    check_vector(sensor.pade_dd, "sensor.pade_dd", owner, (1,))
+    rows = sensor.noise.shape[0] if sensor.noise.ndim == 2 else -1
+    check_vector(sensor.noise, "sensor.noise", owner, (rows, n_ch))
+    check_vector(sensor.resolution, "sensor.resolution", owner, (n_ch,))
+    return n_ch, p
+
+
+def sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> None:
+    """The raw sensed signal (:func:`_sense`), arguments checked."""
+    owner = "sense"
+    _, n = check_model(model, owner)
+    n_ch, _ = _check_sensor(sensor, model, owner)
+    check_vector(q, "q", owner, (n,))
+    check_vector(dq, "dq", owner, (n,))
+    check_vector(out, "out", owner, (n_ch,), writable=True)
+    _sense(q, dq, model, sensor, out)
+
+
+def run(
+    model: ArmArrays,
+    control: CFunc,
+    params: F64,
+    sensor: SensorArrays,
+    reference: F64,
+    dt: float,
+    substeps: int,
+    torque_limit: F64,
+    max_deflection: F64,
+    state: LoopState,
+    k0: int,
+    k1: int,
+    n_steps: int,
+    every: int,
+    out_q: F64,
+    out_dq: F64,
+    out_tau: F64,
+    out_y: F64,
+) -> tuple[int, int]:
+    """The compiled loop (:func:`_run`: its docstring has the semantics) over
+    ``k0 <= k < k1``, every array it will index checked first."""
+    owner = "run"
+    n_links, n = check_model(model, owner)
+    n_ch, p = _check_sensor(sensor, model, owner)
+    k0, k1, n_steps, every, substeps = (int(v) for v in (k0, k1, n_steps, every, substeps))
+    if not (0 <= k0 <= k1 <= n_steps + 1 and every >= 1 and substeps >= 1 and dt > 0):
+        raise InvalidValueError(
+            f"The 'k0', 'k1', 'n_steps', 'every', 'substeps' and 'dt' parameters of {owner} "
+            "must satisfy 0 <= k0 <= k1 <= n_steps + 1, every >= 1, substeps >= 1, dt > 0. "
+            f"Got {k0}, {k1}, {n_steps}, {every}, {substeps}, {dt} instead."
+        )
+    acting = max(0, min(k1, n_steps) - k0)  # instants whose reference the law reads
+    check_vector(params, "params", owner, (params.shape[0],) if params.ndim == 1 else (-1,))
+    if sensor.noise.shape[0] and sensor.noise.shape[0] < k1 - k0:
+        raise InvalidValueError(
+            f"The 'sensor.noise' parameter of {owner} must have a row per instant "
+            f"({k1 - k0}). Got {sensor.noise.shape[0]} rows instead."
+        )
+    _rows_at_least(reference, "reference", owner, acting, reference_size(n_links), False)
+    check_vector(torque_limit, "torque_limit", owner, (n_links,))
+    check_vector(max_deflection, "max_deflection", owner, (n_links,))
+    if not isinstance(state, LoopState):
+        raise InvalidValueError(f"The 'state' parameter of {owner} must be a LoopState.")
+    n_y = measurement_size(n_links, int(model.mode_start[-1]) - n_links)
+    check_vector(state.q, "state.q", owner, (n,), writable=True)
+    check_vector(state.dq, "state.dq", owner, (n,), writable=True)
+    check_vector(state.tau, "state.tau", owner, (n_links,), writable=True)
+    check_vector(state.ctrl_state, "state.ctrl_state", owner, state.ctrl_state.shape, writable=True)
+    delay = int(sensor.delay_steps[0])
+    check_vector(state.buffer, "state.buffer", owner, (delay + 1, n_ch), writable=True)
+    check_vector(state.cursor, "state.cursor", owner, (1,), writable=True, dtype=np.int64)
+    check_vector(state.pade_x, "state.pade_x", owner, (n_ch, p), writable=True)
+    check_vector(state.scratch, "state.scratch", owner, (6, n), writable=True)
+    check_workspace(state.ws, n, owner)
+    check_vector(
+        state.signals, "state.signals", owner, (2 * n_ch + n_y + max(p, 1),), writable=True
+    )
+    recorded = (
+        (max(k1, k0) + every - 1) // every
+        - (k0 + every - 1) // every
+        + (1 if k0 <= n_steps < k1 and n_steps % every else 0)
+    )
+    for name, out, width in (
+        ("out_q", out_q, n),
+        ("out_dq", out_dq, n),
+        ("out_tau", out_tau, n_links),
+        ("out_y", out_y, n_y),
+    ):
+        _rows_at_least(out, name, owner, recorded, width, True)
+    status, k = _run(
+        model,
+        control,
+        params,
+        sensor,
+        reference,
+        dt,
+        substeps,
+        torque_limit,
+        max_deflection,
+        state,
+        k0,
+        k1,
+        n_steps,
+        every,
+        out_q,
+        out_dq,
+        out_tau,
+        out_y,
+    )
+    return int(status), int(k)
+
+
+def _rows_at_least(arr: F64, name: str, owner: str, rows: int, width: int, writable: bool) -> None:
+    if not (isinstance(arr, np.ndarray) and arr.ndim == 2 and arr.shape[0] >= rows):
+        raise InvalidValueError(
+            f"The '{name}' parameter of {owner} must have at least {rows} rows of {width}. "
+            f"Got shape {getattr(arr, 'shape', None)} instead."
+        )
+    check_vector(arr, name, owner, (arr.shape[0], width), writable=writable)
+
+
+@compiled_as(sense)
+def _sense_compiled(q, dq, model, sensor, out):  # type: ignore[no-untyped-def]
+    return lambda q, dq, model, sensor, out: _sense(q, dq, model, sensor, out)

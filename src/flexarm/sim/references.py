@@ -441,7 +441,7 @@ class ReferencePipeline:
     ) -> None:
         """The compiled joint path of rows starting at instant ``k0``, with the
         messages of :func:`joint_path` for a path out of reach or singular."""
-        from .reference_kernels import SINGULAR, UNREACHABLE, joint_path_rows
+        from ._reference_kernels import SINGULAR, UNREACHABLE, joint_path_rows
 
         dtheta = np.empty_like(theta) if dtheta is None else dtheta
         ddtheta = np.empty_like(theta) if ddtheta is None else ddtheta
