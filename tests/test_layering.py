@@ -89,6 +89,8 @@ WITHIN: dict[str, list[str]] = {
         "systems",
         "accumulators",
         "_setup",
+        "chunked",
+        "_persist",
         "regression",
         "arma",
         "correlation",
