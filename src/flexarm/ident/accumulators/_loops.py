@@ -20,6 +20,7 @@ from ..kernels import kernel_profile, kernel_weight
 __all__ = [
     "GAUSS_ZERO",
     "accumulate_rows",
+    "add_totals",
     "band_update_1d",
     "exact_predict",
     "exact_predict_1d",
@@ -228,6 +229,14 @@ def accumulate_rows(W: F64, y: F64, num: F64, den: F64) -> None:  # pragma: no c
             if w != 0.0:
                 num[j] += w * y[i]
                 den[j] += w
+
+
+@nb.njit(cache=True)
+def add_totals(scale: F64, y: F64, totals: F64) -> None:  # pragma: no cover - compiled
+    """``totals += (sum scale_i, sum scale_i |y_i|)``, one sample at a time, in order."""
+    for i in range(y.shape[0]):
+        totals[0] += scale[i]
+        totals[1] += scale[i] * abs(y[i])
 
 
 @nb.njit(cache=True)

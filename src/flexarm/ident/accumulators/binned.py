@@ -80,7 +80,7 @@ class BinnedSums(GridAccumulator):
                 gs = self.sorted_grid[:, 0]
                 c = binning.radius(self.kernel)
                 _loops.grid_update_1d(setup.code, gs, xs, ys, h[:, 0], scale, self.num, self.den, c)
-                self.totals += (scale.sum(), (scale * np.abs(ys)).sum())
+                _loops.add_totals(scale, ys, self.totals)  # one by one: chunks equal one call
             else:
                 binning.bin_samples(
                     xs,
