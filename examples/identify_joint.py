@@ -10,11 +10,16 @@ encoder, rate, current and accelerometer signals the script identifies
 * the friction curve ``f(v)`` (link-side torque balance over a sliding window),
 * a Hammerstein model from the command to the link acceleration,
 
-and compares each with the truth. See :mod:`flexarm.studies.joint_identification`.
-Run from the repository root::
+and compares each with the truth. With ``--design`` the experiment is sized to
+resolve the drive's ±2 N m dead band — half the commands within ±6 N m, the
+duration from a 20 s pilot run — and the Hammerstein model is identified on
+the correlated-input path, whose knots follow the command density
+(:mod:`flexarm.studies.joint_identification.design`). See
+:mod:`flexarm.studies.joint_identification`. Run from the repository root::
 
     python examples/identify_joint.py                      # 60 s experiment
     python examples/identify_joint.py --duration 30 --out results/joint
+    python examples/identify_joint.py --design             # resolve the dead band
 """
 
 from __future__ import annotations
@@ -22,8 +27,14 @@ from __future__ import annotations
 import argparse
 import sys
 
+import numpy as np
+
 from flexarm.errors import InvalidTypeError, InvalidValueError
-from flexarm.studies.joint_identification import JointExcitation, identify_joint
+from flexarm.studies.joint_identification import (
+    JointExcitation,
+    design_dead_band_excitation,
+    identify_joint,
+)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -35,14 +46,36 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="measure tau_s with a joint torque sensor instead of the motor balance",
     )
+    parser.add_argument(
+        "--design", action="store_true", help="size the experiment to resolve the dead band"
+    )
     parser.add_argument("--out", metavar="DIR", help="write summary.json, curves.npz and a plot")
     args = parser.parse_args(argv)
+    measurement = "sensor" if args.torque_sensor else "motor-balance"
     try:
-        res = identify_joint(
-            excitation=JointExcitation(duration=args.duration),
-            torque_measurement="sensor" if args.torque_sensor else "motor-balance",
-            rng=args.seed,
-        )
+        if args.design:
+            pilot_rng, main_rng = np.random.default_rng(args.seed).spawn(2)
+            design = design_dead_band_excitation(rng=pilot_rng)
+            d = design.summary()
+            print(
+                f"design: {100 * d['dead_band_fraction']:g} % of the commands within "
+                f"+-{d['dead_band_span_Nm']:g} N m for {d['n_knots']} knots {d['resolution_Nm']:g} "
+                f"N m apart and a standard error of {d['precision_Nm']:g} N m: "
+                f"{d['n_holds']} estimation holds, {d['duration_s']:g} s "
+                f"(pilot: sigma {d['pilot']['sigma']:.3g} rad/s^2, gain {d['pilot']['gain']:.3g})"
+            )
+            res = identify_joint(
+                excitation=design.excitation,
+                torque_measurement=measurement,
+                method="correlated",
+                rng=main_rng,
+            )
+        else:
+            res = identify_joint(
+                excitation=JointExcitation(duration=args.duration),
+                torque_measurement=measurement,
+                rng=args.seed,
+            )
     except (InvalidTypeError, InvalidValueError) as exc:  # bad settings; a bug keeps its traceback
         print(f"identify_joint: {exc}", file=sys.stderr)
         return 2
@@ -67,8 +100,16 @@ def main(argv: list[str] | None = None) -> int:
         )
     model = res.hammerstein
     print(
-        f"Hammerstein model: ARMA order {model.order_}, free-run fit on held-out data "
-        f"{res.fit_percent:.1f} % (FIR on the true drive map: {res.reference_fit_percent:.1f} %)"
+        f"Hammerstein model ({model.method_} path): ARMA order {model.order_}, free-run fit on "
+        f"held-out data {res.fit_percent:.1f} % (FIR on the true drive map: "
+        f"{res.reference_fit_percent:.1f} %)"
+    )
+    db = res.dead_band
+    print(
+        f"dead band: half-width {db['half_width_negative_Nm']:.2f} / "
+        f"{db['half_width_positive_Nm']:.2f} N m (true {db['true_half_width_Nm']:g}), RMS error "
+        f"{db['rms_error_Nm']:.3g} N m and largest {db['max_error_Nm']:.3g} N m within "
+        f"+-{db['span_Nm']:g} N m"
     )
     if args.out:
         for path in res.save(args.out):

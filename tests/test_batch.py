@@ -110,3 +110,43 @@ def test_bad_batches_name_the_parameter(kw, error, needle):
 
 def test_an_empty_batch_is_empty():
     assert simulate_many([]) == []
+
+
+def test_a_stop_flag_ends_a_run_between_chunks():
+    import threading
+
+    from flexarm.errors import Cancelled
+
+    arm = FlexibleArm.paper()
+    stop = threading.Event()
+    stop.set()
+    with pytest.raises(Cancelled):
+        simulate(arm, duration=0.1, stop=stop)
+    stop = threading.Event()
+    timer = threading.Timer(0.3, stop.set)
+    timer.start()
+    with pytest.raises(Cancelled):  # 3000 s of simulated time: seconds of work
+        simulate(arm, duration=3000.0, record_every=1000, stop=stop)
+    timer.cancel()
+
+
+def test_closing_a_batch_stops_its_runs(monkeypatch):
+    """Runs in flight get the batch's stop flag, and closing the batch sets it."""
+    from flexarm.sim import batch
+
+    flags = []
+
+    def spy(arm, **kw):
+        flags.append(kw["stop"])
+        return simulate(arm, **kw)
+
+    monkeypatch.setattr(batch, "simulate", spy)
+    arm = FlexibleArm.paper()
+    runs = [{"arm": arm, "duration": 0.01}] + [
+        {"arm": arm, "duration": 3000.0, "record_every": 1000} for _ in range(3)
+    ]
+    outcomes = iter_simulations(runs, workers=2)
+    first = next(outcomes)
+    outcomes.close()
+    assert first[0] == 0 and len(flags) >= 2
+    assert all(flag.is_set() for flag in flags)

@@ -47,7 +47,9 @@ def test_fit_with_two_known_points_recovers_the_nonlinearity(capsys, tmp_path, d
     u, y = np.loadtxt(path, delimiter=",", skiprows=1, unpack=True)
     model = HammersteinIdentifier(known_points=((0.0, 0.0), (1.8, 1.0))).fit(u, y)
     np.testing.assert_allclose(estimate, model.nonlinearity(x), rtol=1e-12, atol=1e-12)
-    assert summary["fit_percent"] == pytest.approx(model.score(u, y), rel=1e-12)
+    assert summary["fit_percent"] == pytest.approx(model.fit_percent(u, y), rel=1e-12)
+    assert summary["method"] == "white" and "looks white" in summary["reason"]
+    assert summary["baseline"]["fit_percent"] == pytest.approx(model.baseline_.fit_percent(u, y))
     # two-point normalisation: the estimate passes through the known points (up to the
     # interpolation between grid points 0.02 apart), and has the saturation's shape
     assert np.interp([0.0, 1.8], x, estimate) == pytest.approx([0.0, 1.0], abs=0.02)
@@ -114,7 +116,9 @@ def test_robot_experiment_writes_its_files(capsys, tmp_path):
         (("--grid", "100"), "unrecognized arguments: --grid"),
         (("--x", "nope"), "nope"),
         (("--torque-sensor",), "--torque-sensor"),
-        (("--seed", "3"), "--seed"),
+        (("--method", "colour"), "--method"),
+        (("--knots", "1"), "--knots"),
+        (("--bootstrap", "5"), "--bootstrap"),
     ],
 )
 def test_bad_options_are_one_line_and_write_nothing(capsys, tmp_path, data, extra, match):
@@ -148,3 +152,35 @@ def test_constant_input_is_a_clear_error(capsys, tmp_path):
     np.savetxt(path, np.column_stack([np.ones(3000), np.arange(3000.0)]), delimiter=",")
     status, _, err = run(capsys, "identify", "hammerstein", path)
     assert status == 2 and "'u'" in err and "Traceback" not in err
+
+
+def test_method_knots_and_bootstrap_options(capsys, tmp_path, data):
+    path, _ = data
+    out = tmp_path / "c"
+    argv = ("identify", "hammerstein", path, "--x", "u", "--y", "y", "--method", "correlated")
+    status, stdout, err = run(capsys, *argv, "--knots", "8", "--bootstrap", "10", "--seed", "4",
+                              "--lags", "20", "--out", out, "--json")  # fmt: skip
+    assert status == 0, err
+    s = json.loads(stdout)
+    assert s["method"] == "correlated" and "method='correlated' was asked for" in s["reason"]
+    assert s["n_knots"] == 8 and s["structure"]["chosen_by"] == "held-out"  # the order is chosen
+    assert s["whiteness"]["white"] and s["seed"] == 4
+    assert s["bands"]["n_boot"] == 10 and s["baseline"]["order"] >= 1
+    u, y = np.loadtxt(path, delimiter=",", skiprows=1, unpack=True)
+    model = HammersteinIdentifier(n_lags=20, method="correlated", n_knots=8).fit(u, y)
+    assert s["fit_percent"] == pytest.approx(model.fit_percent(u, y), rel=1e-12)
+    header = (out / "nonlinearity.csv").read_text().splitlines()[0]
+    assert header == "u,phi,phi_low,phi_high"
+    status, text, err = run(capsys, *argv, "--lags", "20")
+    assert status == 0 and "path: correlated input" in text and "linear ARX baseline" in text
+
+
+def test_robot_experiment_designed_for_the_dead_band(capsys):
+    status, stdout, err = run(capsys, "identify", "hammerstein", "--design", "--json")
+    assert status == 0, err
+    s = json.loads(stdout)
+    assert s["design"]["dead_band_fraction"] == 0.5 and s["hammerstein"]["method"] == "correlated"
+    assert s["duration_s"] == s["design"]["duration_s"] == s["info"]["duration_s"]
+    assert abs(s["dead_band"]["half_width_positive_Nm"] - 2.0) <= 1.0
+    status, _, err = run(capsys, "identify", "hammerstein", "--design", "--duration", "30")
+    assert status == 2 and "--duration: not with --design" in err

@@ -18,7 +18,7 @@ from flexarm.cli import main
 from flexarm.model.joints import MakkarFriction
 from flexarm.sensing.delays import SEED_WAVE_SPEED, bending_group_speed, travel_delay
 from flexarm.sim import simulate
-from flexarm.sim.results import SimulationResult
+from flexarm.sim.results import RESULT_FILES, SimulationResult
 from flexarm.sim.scenario import Scenario, load_scenario
 from flexarm.sim.scenario_schema import ScenarioError, apply_overrides
 
@@ -394,18 +394,31 @@ def test_an_option_overriding_a_file_is_blamed_on_the_option(capsys, tmp_path):
     assert "scenario.toml" not in line
 
 
-def test_a_diverging_run_exits_1_with_one_line_and_writes_nothing(capsys, tmp_path):
+def test_a_diverging_run_exits_1_with_one_line_and_keeps_the_partial_run(capsys, tmp_path):
     out_dir = tmp_path / "out"
     status, out, err = run(
         capsys, "simulate", "--sensor", "tip", "--duration", "0.5", "--out", out_dir, "--json"
     )
     assert status == 1
-    assert out == ""
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in err
-    assert "diverged at t = " in lines[0]
+    assert "diverged at t = " in lines[0] and str(out_dir) in lines[0]
     t = float(lines[0].split("t = ")[1].split()[0])
     assert 0 < t < 0.1
+    summary = json.loads(out)
+    assert summary["status"] == "diverged" and summary["diverged_at_s"] == pytest.approx(t)
+    assert summary["rms_error_m"] is None and len(summary["last_state"]) == 8
+    assert sorted(p.name for p in out_dir.iterdir()) == sorted(RESULT_FILES)
+    on_disk = json.loads((out_dir / "summary.json").read_text())
+    assert on_disk["status"] == "diverged"
+    kept = SimulationResult.load(out_dir / "result.npz")
+    assert kept.info["status"] == "diverged" and kept.t[-1] == pytest.approx(t)
+
+
+def test_a_diverging_run_without_out_writes_nothing(capsys, tmp_path):
+    status, out, err = run(capsys, "simulate", "--sensor", "tip", "--duration", "0.5")
+    assert status == 1 and out == ""
+    assert err.strip().endswith("; nothing written")
     assert list(tmp_path.iterdir()) == []
 
 

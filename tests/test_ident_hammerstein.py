@@ -222,7 +222,8 @@ def test_prediction_on_fresh_data(phi_name, order):
     y_hat = est.predict(u_new)
     nrmse = np.linalg.norm(y_new - y_hat) / np.linalg.norm(y_new - y_new.mean())
     assert nrmse < 0.1, nrmse
-    assert est.score(u_new, y_new) == pytest.approx(100 * (1 - nrmse))
+    assert est.fit_percent(u_new, y_new) == pytest.approx(100 * (1 - nrmse))
+    assert est.score(u_new, y_new) == pytest.approx(1 - nrmse**2)  # R², scikit-learn's score
 
 
 def test_linear_model_fails_where_the_hammerstein_model_fits():
@@ -238,7 +239,7 @@ def test_linear_model_fails_where_the_hammerstein_model_fits():
 
     coef = np.linalg.lstsq(lagged(u), y, rcond=None)[0]  # least-squares FIR on u
     assert fit_percent(y_new, lagged(u_new) @ coef) < 10
-    assert HammersteinIdentifier().fit(u, y).score(u_new, y_new) > 90
+    assert HammersteinIdentifier().fit(u, y).fit_percent(u_new, y_new) > 90
 
 
 def test_two_point_normalisation_closed_form():
@@ -342,7 +343,14 @@ GOOD_Y = np.convolve(GOOD_U, [1.0, 0.5])[:1000]
     ("kwargs", "u", "y", "exc", "match"),
     [
         ({}, GOOD_U, GOOD_Y[:999], ValueError, r"'y' parameter .* length of u \(1000\)"),
-        ({}, GOOD_U[:100], GOOD_Y[:100], ValueError, "'u' parameter .* at least 256 samples"),
+        (
+            {"method": "white"},
+            GOOD_U[:200],
+            GOOD_Y[:200],
+            ValueError,
+            r"'u' parameter .* at least 256 samples \(max\(warmup, 4 \* n_lags\)\)",
+        ),
+        ({}, GOOD_U[:99], GOOD_Y[:99], ValueError, "'u' parameter .* at least 100 samples"),
         ({}, np.ones(1000), GOOD_Y, ValueError, "'u' parameter of HammersteinIdentifier must vary"),
         ({}, GOOD_U, np.ones(1000), ValueError, "'y' parameter of HammersteinIdentifier must vary"),
         ({}, np.r_[np.nan, GOOD_U[1:]], GOOD_Y, ValueError, "'u' parameter .* finite"),

@@ -137,6 +137,7 @@ def test_summary_plot_and_save(result, tmp_path):
         ({"quasi_static_fraction": 0.0}, ValueError, "'quasi_static_fraction' parameter"),
         ({"friction_window": 0}, ValueError, "'friction_window' parameter"),
         ({"rng": "seed"}, TypeError, "'rng' parameter of identify_joint"),
+        ({"method": "colour"}, ValueError, "'method' parameter of identify_joint"),
     ],
 )
 def test_bad_input(kwargs, exc, match):
@@ -151,6 +152,16 @@ def test_parameter_classes_validate():
         DriveNonlinearity(limit=0.0)
     with pytest.raises(ValueError, match="'rate_noise' parameter of JointSensors"):
         JointSensors(rate_noise=-1.0)
+    with pytest.raises(ValueError, match="'dead_band_fraction' parameter of JointExcitation"):
+        JointExcitation(dead_band_fraction=1.0)
+    with pytest.raises(ValueError, match="'dead_band_span' parameter of JointExcitation"):
+        JointExcitation(dead_band_span=100.0)
+    from flexarm.studies.joint_identification import design_dead_band_excitation
+
+    with pytest.raises(ValueError, match="'fraction' parameter of design_dead_band_excitation"):
+        design_dead_band_excitation(fraction=1.0)
+    with pytest.raises(TypeError, match="'pilot' parameter of design_dead_band_excitation"):
+        design_dead_band_excitation(pilot=3)
 
 
 def test_example_script(tmp_path, capsys):
@@ -167,6 +178,10 @@ def test_example_script(tmp_path, capsys):
     assert (tmp_path / "identify_joint.png").stat().st_size > 0
     assert module.main(["--duration", "2"]) == 2  # too short: one line on stderr
     assert "at least 300 holds" in capsys.readouterr().err
+    assert module.main(["--design"]) == 0  # the experiment sized for the dead band
+    out = capsys.readouterr().out
+    assert out.startswith("design: 50 % of the commands") and "correlated path" in out
+    assert "dead band: half-width" in out
     import matplotlib.pyplot as plt
 
     plt.close("all")
@@ -182,3 +197,47 @@ def test_settings_load_no_simulator():
     )
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
     assert res.returncode == 0, res.stderr
+
+
+def test_designed_excitation_resolves_the_dead_band():
+    """Issue 17: the drive's +-2 N m dead band is not resolved by 60 s of uniform commands; an
+    excitation sized for it (design module) resolves it: both half-widths within half the
+    dead band of the truth (the resolution the design asks for), and the RMS error within
+    +-3 dead-band widths below a quarter of the dead band."""
+    from flexarm.studies.joint_identification import design_dead_band_excitation
+
+    pilot_rng, main_rng = np.random.default_rng(0).spawn(2)
+    design = design_dead_band_excitation(rng=pilot_rng)
+    ex, delta = design.excitation, 2.0
+    # the design's arithmetic (module docstring), recomputed from its pilot figures
+    c = 3 * delta
+    share = 0.5 + 0.5 * c / 60.0
+    assert ex.dead_band_fraction == 0.5 and ex.dead_band_span == c
+    assert design.n_knots - 1 == int(np.ceil(2 * c / (share * delta / 2)))
+    sigma, gain = design.pilot["sigma"], design.pilot["gain"]
+    n_est = int(np.ceil(np.sqrt(3) * (design.n_knots - 1) * sigma**2 / (0.2**2 * gain**2)))
+    assert design.n_holds == n_est and not design.capped
+    assert ex.duration == np.ceil(np.ceil(n_est * 1.5) * 0.01)
+    res = identify_joint(excitation=ex, method="correlated", rng=main_rng)
+    db = res.dead_band
+    for side in ("positive", "negative"):
+        assert abs(db[f"half_width_{side}_Nm"] - delta) <= delta / 2, db
+    assert db["rms_error_Nm"] <= delta / 4, db
+    assert res.hammerstein.method_ == "correlated"
+    # the uniform experiment of 60 s: no dead band in the estimate
+    uniform = identify_joint(excitation=JointExcitation(duration=60.0), rng=0).dead_band
+    assert uniform["rms_error_Nm"] > delta / 4
+    assert max(uniform["half_width_positive_Nm"], uniform["half_width_negative_Nm"]) < delta / 2
+
+
+def test_dead_band_summary_reads_a_known_curve():
+    from flexarm.studies.joint_identification.estimation import dead_band_summary
+
+    drive = DriveNonlinearity(2.0, 40.0)
+    exact = dead_band_summary(drive, drive, 6.0)
+    assert exact["rms_error_Nm"] == 0.0 and exact["half_width_positive_Nm"] == pytest.approx(2.0)
+    assert exact["half_width_negative_Nm"] == pytest.approx(2.0)
+    assert exact["slope_positive"] == pytest.approx(1.0)
+    shifted = dead_band_summary(DriveNonlinearity(1.0, 40.0), drive, 6.0)
+    assert shifted["half_width_positive_Nm"] == pytest.approx(1.0)
+    assert shifted["max_error_Nm"] == pytest.approx(1.0)

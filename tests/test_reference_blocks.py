@@ -130,3 +130,27 @@ def test_a_path_out_of_reach_names_the_time_and_point(arm):
     far = Line((5.00005, 0.0), (12.00005, 0.0), 7.0, timing="constant")  # 9 m at 4 s
     with pytest.raises(InvalidValueError, match=r"workspace.*reachable.*at t = 4 s"):
         ReferencePipeline(arm, far, 1e-3, 7000).rows(0, 7001)
+
+
+# ------------------------------------------------------------------ other link counts
+@pytest.mark.parametrize(
+    "lengths, where",
+    [((1.0,), r"1-link arm, at a distance of 1\.0 m"), ((1.0, 1.0, 1.0), r"\[0\.0, 3\.0\] m")],
+)
+def test_arms_of_other_link_counts_refuse_a_path_out_of_reach(lengths, where):
+    """A one-link arm reaches a circle; three links an annulus: the default square
+    (3.6 m to 7.3 m from the base) is out of reach of both, named with the time."""
+    from flexarm import Link, simulate
+
+    arm = FlexibleArm([Link(length, 1676.0, 0.335) for length in lengths])
+    with pytest.raises(InvalidValueError, match=rf"'trajectory'.*{where}.*at t = 0 s"):
+        simulate(arm, duration=0.5)
+
+
+def test_a_one_link_arm_on_its_circle_runs():
+    from flexarm import Link, simulate
+
+    arm = FlexibleArm([Link(1.0, 1676.0, 0.335)])
+    circle = Circle(center=(0.0, 0.0), radius=1.0, period=4.0)
+    result = simulate(arm, trajectory=circle, duration=0.05, dt=1e-5)  # a short, stiff link
+    assert result.info["status"] == "ok"

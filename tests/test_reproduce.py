@@ -170,6 +170,8 @@ def test_cli_text_summary(capsys, tmp_path):
         (("--tolerance", "nan"), "tolerance"),
         (("--workers", "0"), "workers"),
         (("--bogus",), "unrecognized"),
+        (("--dt", "1e-9", "--duration", "1", "--no-sensitivity"), "FLEXARM_MAX_MEMORY"),
+        (("--duration", "1e9", "--no-sensitivity"), "FLEXARM_MAX_MEMORY"),
     ],
 )
 def test_cli_bad_options_are_one_line_and_write_nothing(capsys, tmp_path, argv, match):

@@ -96,8 +96,9 @@ def check_memory(nbytes: float, what: str, owner: str, remedy: str) -> None:
     limit = memory_limit()
     if nbytes > limit:
         raise InvalidValueError(
-            f"{owner}: {what} would need about {format_bytes(nbytes)} of memory, more than "
-            f"the limit of {format_bytes(limit)}. {remedy}; or raise the limit with the "
+            f"The request to {owner} ({what}) would need about {format_bytes(nbytes)} of "
+            f"memory, more than the limit of {format_bytes(limit)}. {remedy}; or raise the "
+            "limit with the "
             f"environment variable {MEMORY_ENV} (e.g. {MEMORY_ENV}=64G, 0 for none)."
         )
 
@@ -107,8 +108,8 @@ def check_time(seconds: float, what: str, owner: str, remedy: str) -> None:
     limit = time_limit()
     if seconds > limit:
         raise InvalidValueError(
-            f"{owner}: {what} would take about {format_seconds(seconds)} on this machine, "
-            f"longer than the limit of {format_seconds(limit)}. {remedy}; or raise the "
-            f"limit with the environment variable {TIME_ENV} (e.g. {TIME_ENV}=12h, 0 for "
-            "none)."
+            f"The request to {owner} ({what}) would take about {format_seconds(seconds)} on "
+            f"this machine, longer than the limit of {format_seconds(limit)}. {remedy}; or "
+            f"raise the limit with the environment variable {TIME_ENV} (e.g. {TIME_ENV}=12h, "
+            "0 for none)."
         )

@@ -1,7 +1,15 @@
-"""Atomic file writes: a file appears whole under its name, or not at all."""
+"""Atomic file writes: a file appears whole under its name, or not at all.
+
+Temporary files and directories are written beside their target, named
+``.{target}.{pid}.{random}.tmp``, and renamed into place when complete; on any
+error (Ctrl-C and SIGTERM included) they are removed. A writer killed outright
+(SIGKILL, a power cut) cannot clean up: the next write to the same target
+removes the temporaries whose process is gone (:func:`remove_stale`).
+"""
 
 from __future__ import annotations
 
+import glob
 import math
 import os
 import secrets
@@ -14,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["JSONValue", "atomic_path", "json_ready", "output_directory"]
+__all__ = ["JSONValue", "atomic_path", "json_ready", "output_directory", "remove_stale"]
 
 JSONValue = None | bool | int | float | str | list["JSONValue"] | dict[str, "JSONValue"]
 """A value JSON can hold (before :func:`json_ready` maps NaN and arrays)."""
@@ -29,7 +37,10 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     is removed and ``path`` is left untouched.
     """
     target = Path(path)
-    fd, name = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    remove_stale(target)
+    fd, name = tempfile.mkstemp(
+        dir=target.parent, prefix=f".{target.name}.{os.getpid()}.", suffix=".tmp"
+    )
     os.close(fd)
     tmp = Path(name)
     try:
@@ -51,8 +62,9 @@ def output_directory(out: Path) -> Iterator[Path]:
     (``out`` may be an empty directory, which is replaced); on any error the
     temporary directory is removed and ``out`` is left as it was.
     """
+    remove_stale(out)
     while True:
-        tmp = out.parent / f".{out.name}.{secrets.token_hex(4)}.tmp"
+        tmp = out.parent / f".{out.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
         try:
             tmp.mkdir()
             break
@@ -64,6 +76,46 @@ def output_directory(out: Path) -> Iterator[Path]:
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+
+
+def remove_stale(target: Path) -> list[Path]:
+    """Remove the temporaries of earlier writes to ``target`` whose process is gone
+    (killed before it could clean up); return what was removed.
+
+    Temporaries of a live process (another writer at work) are left alone.
+    """
+    removed: list[Path] = []
+    try:
+        siblings = list(target.parent.glob(f".{glob.escape(target.name)}.*.tmp"))
+    except OSError:
+        return removed
+    for tmp in siblings:
+        parts = tmp.name[len(target.name) + 2 : -len(".tmp")].split(".")
+        if len(parts) < 2 or not parts[0].isdigit() or _alive(int(parts[0])):
+            continue
+        try:
+            if tmp.is_dir() and not tmp.is_symlink():
+                shutil.rmtree(tmp)
+            else:
+                tmp.unlink()
+            removed.append(tmp)
+        except OSError:
+            continue
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # someone else's live process
+        return True
+    except (OverflowError, OSError):
+        return False
+    return True
 
 
 def json_ready(value: Any) -> Any:

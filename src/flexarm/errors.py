@@ -19,7 +19,7 @@ InvalidValueError
 
 from __future__ import annotations
 
-__all__ = ["FlexarmError", "InvalidTypeError", "InvalidValueError"]
+__all__ = ["Cancelled", "FlexarmError", "InvalidTypeError", "InvalidValueError"]
 
 
 class FlexarmError(Exception):
@@ -33,3 +33,8 @@ class InvalidValueError(FlexarmError, ValueError):
 
 class InvalidTypeError(FlexarmError, TypeError):
     """A parameter or an input has a wrong type."""
+
+
+class Cancelled(FlexarmError):
+    """A run was stopped before its end because its ``stop`` flag was set (e.g. by
+    a batch that was interrupted); nothing of it was kept."""

@@ -6,12 +6,17 @@ import argparse
 from pathlib import Path
 from typing import NoReturn
 
-from .._io import json_ready, output_directory
+from .._io import json_ready, output_directory, remove_stale
 
 __all__ = [
     "EXIT_FAILURE",
+    "EXIT_INTERRUPTED",
+    "EXIT_PIPE",
+    "EXIT_TERMINATED",
     "EXIT_USAGE",
     "Parser",
+    "Stopped",
+    "Terminated",
     "UsageError",
     "check_out",
     "json_ready",
@@ -20,6 +25,23 @@ __all__ = [
 
 EXIT_FAILURE = 1  # the job failed (a simulation diverged), or the results could not be written
 EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130  # 128 + SIGINT: Ctrl-C
+EXIT_PIPE = 141  # 128 + SIGPIPE: the reader of stdout went away (e.g. `| head`)
+EXIT_TERMINATED = 143  # 128 + SIGTERM
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived (raised in the main thread by the command line's handler, so
+    that cleanup runs as for Ctrl-C)."""
+
+
+class Stopped(BaseException):
+    """A command interrupted by Ctrl-C or SIGTERM that kept something: ``message``
+    says what (the command line prints it as the one line, and exits ``status``)."""
+
+    def __init__(self, message: str, status: int) -> None:
+        super().__init__(message)
+        self.status = status
 
 
 class UsageError(Exception):
@@ -37,7 +59,10 @@ def check_out(out: Path, prog: str) -> None:
     """Refuse an ``--out`` that cannot take the results, before any work is done.
 
     ``out`` must be new or an empty directory, in an existing parent directory.
+    Temporaries of earlier writes to ``out`` whose process was killed are removed
+    first (:func:`flexarm._io.remove_stale`).
     """
+    remove_stale(out)
     if out.exists() and not (out.is_dir() and not any(out.iterdir())):
         raise UsageError(
             f"{prog}: error: argument --out: {str(out)!r} exists and is not an empty "

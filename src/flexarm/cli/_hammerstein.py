@@ -13,21 +13,22 @@ from __future__ import annotations
 import argparse
 import inspect
 import time
+import warnings
 from collections.abc import Callable
 from typing import Any
 
-from ..ident.options import CRITERIA
+from ..ident.options import METHODS, ORDER_RULES
 from ._common import UsageError
 from ._identify_common import check_out_option, given, library_errors, positive_int, report
 
-__all__ = ["add_parser", "parse_known", "parse_order"]
+__all__ = ["add_parser", "parse_knots", "parse_known", "parse_order"]
 
 PROG = "flexarm identify hammerstein"
 
 
 def parse_order(text: str) -> int | str:
-    """``--order``: "bic", "aic" or a positive integer."""
-    if text in CRITERIA:
+    """``--order``: "auto", "bic", "aic" or a positive integer."""
+    if text in ORDER_RULES:
         return text
     try:
         value = int(text)
@@ -35,7 +36,22 @@ def parse_order(text: str) -> int | str:
         value = 0
     if value < 1:
         raise argparse.ArgumentTypeError(
-            f"must be 'bic', 'aic' or an integer >= 1. Got {text!r} instead."
+            f"must be 'auto', 'bic', 'aic' or an integer >= 1. Got {text!r} instead."
+        )
+    return value
+
+
+def parse_knots(text: str) -> int | str:
+    """``--knots``: "auto" or an integer >= 2."""
+    if text == "auto":
+        return text
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 2:
+        raise argparse.ArgumentTypeError(
+            f"must be 'auto' or an integer >= 2. Got {text!r} instead."
         )
     return value
 
@@ -84,15 +100,27 @@ def _run(
 def _fit_data(args: argparse.Namespace) -> int:
     from ..ident.data import read_xy
     from ..ident.fits import fit_hammerstein
+    from ..ident.whiteness import IdentificationWarning
 
     t0 = time.perf_counter()
     columns = given(args, x="x", y="y")
-    with library_errors(PROG):
+    seed = 0 if args.seed is None else args.seed
+    with library_errors(PROG), warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentificationWarning)  # in the summary instead
         u, y, dropped = read_xy(args.data, **columns, drop_nan=args.drop_nan)
         res = fit_hammerstein(
             u,
             y,
-            **given(args, n_lags="lags", order="order", known_points="known"),
+            **given(
+                args,
+                n_lags="lags",
+                order="order",
+                known_points="known",
+                method="method",
+                n_knots="knots",
+                bootstrap="bootstrap",
+            ),
+            rng=seed,
             u_label=str(columns.get("x", 0)),
             y_label=str(columns.get("y", 1)),
         )
@@ -102,6 +130,7 @@ def _fit_data(args: argparse.Namespace) -> int:
         "data": str(args.data),
         "columns": {"u": columns.get("x", 0), "y": columns.get("y", 1)},
         "dropped_nan_rows": dropped,
+        "seed": seed if args.bootstrap else None,
         **res.summary(),
         "wall_time_s": time.perf_counter() - t0,
     }
@@ -109,76 +138,137 @@ def _fit_data(args: argparse.Namespace) -> int:
 
 
 def _robot(args: argparse.Namespace) -> int:
-    from ..studies.joint_identification import JointExcitation, identify_joint
+    from ..studies.joint_identification import (
+        JointExcitation,
+        design_dead_band_excitation,
+        identify_joint,
+    )
 
+    if args.design and args.duration is not None:
+        raise UsageError(f"{PROG}: error: argument --duration: not with --design (it sets it)")
     t0 = time.perf_counter()
     measurement = "sensor" if args.torque_sensor else "motor-balance"
-    with library_errors(PROG):
-        excitation = JointExcitation(**given(args, duration="duration"))
-        res = identify_joint(
-            excitation=excitation,
-            torque_measurement=measurement,
-            **given(args, n_lags="lags", rng="seed"),
-        )
     seed = args.seed
     if seed is None:
         seed = inspect.signature(identify_joint).parameters["rng"].default
+    design = None
+    with library_errors(PROG):
+        if args.design:  # the pilot and the experiment: independent streams of one seed
+            import numpy as np
+
+            pilot_rng, main_rng = np.random.default_rng(seed).spawn(2)
+            design = design_dead_band_excitation(rng=pilot_rng)
+            excitation = design.excitation
+        else:
+            excitation = JointExcitation(**given(args, duration="duration"))
+        res = identify_joint(
+            excitation=excitation,
+            torque_measurement=measurement,
+            method="correlated" if args.design else "auto",
+            **given(args, n_lags="lags"),
+            rng=main_rng if args.design else seed,
+        )
     summary = {
         "status": "ok",
         "mode": "hammerstein-robot",
         "duration_s": excitation.duration,
         "torque_measurement": measurement,
         "seed": seed,
+        "design": None if design is None else design.summary(),
         **res.summary(),
         "wall_time_s": time.perf_counter() - t0,
     }
     return report(args, PROG, summary, res.save, _format)
 
 
+def _format_data(summary: dict[str, Any]) -> str:
+    """The human-readable summary of a fit to DATA."""
+    base = summary["baseline"]
+    if summary["method"] == "white":
+        structure = f"{summary['n_lags']} lags by correlation, ARMA order {summary['arma_order']}"
+    else:
+        st = summary["structure"]
+        structure = (
+            f"ARX-Hammerstein order {st['order']}, {st['n_knots']} knots ({st['chosen_by']}), "
+            f"{st['estimator']}"
+        )
+    helps = "helps" if summary["nonlinear_helps"] else "does not help"
+    lines = [
+        f"{PROG}: {summary['n_samples']} samples from {summary['data']} "
+        f"(u = column {summary['columns']['u']}, y = column {summary['columns']['y']})",
+        f"  path: {summary['method']} input -- {summary['reason']}",
+        f"  model: {structure}; nonlinearity {summary['normalisation']}",
+        f"  free-run fit on the data: {summary['fit_percent']:.2f} % "
+        f"(linear ARX baseline, order {base['order']}: {base['fit_percent']:.2f} %); "
+        f"the nonlinearity {helps}",
+    ]
+    if summary["bands"] is not None:
+        b = summary["bands"]
+        lines.append(
+            f"  bootstrap: {b['n_boot']} replicates, blocks of {b['block_length']} samples, "
+            f"{100 * b['level']:g} % bands (seed {summary['seed']})"
+        )
+    lines += [f"  warning: {w}" for w in summary["warnings"]]
+    return "\n".join(lines)
+
+
 def _format(summary: dict[str, Any]) -> str:
     """The human-readable summary."""
     if summary["mode"] == "hammerstein":
-        return "\n".join(
-            [
-                f"{PROG}: {summary['n_samples']} samples from {summary['data']} "
-                f"(u = column {summary['columns']['u']}, y = column {summary['columns']['y']})",
-                f"  linear part: {summary['n_lags']} lags, ARMA order {summary['arma_order']}; "
-                f"nonlinearity {summary['normalisation']}",
-                f"  free-run fit on the data: {summary['fit_percent']:.2f} %",
-            ]
-        )
+        return _format_data(summary)
     s, f, d, h = summary["stiffness"], summary["friction"], summary["drive"], summary["hammerstein"]
-    return "\n".join(
-        [
-            f"{PROG}: random-torque experiment on the nonlinear joint "
-            f"({summary['duration_s']:g} s, tau_s by {summary['torque_measurement']})",
-            f"  stiffness curve: RMS error {s['rms_error']:.4g} {s['y_unit']}",
-            f"  friction curve:  RMS error {f['rms_error']:.4g} {f['y_unit']}",
-            f"  drive nonlinearity (Hammerstein): RMS error {d['rms_error']:.4g} {d['y_unit']}",
-            f"  Hammerstein free-run fit on held-out data: {h['fit_percent']:.2f} % "
-            f"(reference {h['reference_fit_percent']:.2f} %)",
-        ]
-    )
+    db, design = summary["dead_band"], summary["design"]
+    lines = [
+        f"{PROG}: random-torque experiment on the nonlinear joint "
+        f"({summary['duration_s']:g} s, tau_s by {summary['torque_measurement']})",
+    ]
+    if design is not None:
+        lines.append(
+            f"  designed for the dead band: {100 * design['dead_band_fraction']:g} % of the "
+            f"commands within +-{design['dead_band_span_Nm']:g} N m, {design['n_knots']} knots, "
+            f"{design['n_holds']} estimation holds (pilot {design['pilot']['duration_s']:g} s)"
+        )
+    lines += [
+        f"  stiffness curve: RMS error {s['rms_error']:.4g} {s['y_unit']}",
+        f"  friction curve:  RMS error {f['rms_error']:.4g} {f['y_unit']}",
+        f"  drive nonlinearity (Hammerstein, {h['method']} path): RMS error "
+        f"{d['rms_error']:.4g} {d['y_unit']}",
+        f"  dead band: half-width {db['half_width_negative_Nm']:.2f} / "
+        f"{db['half_width_positive_Nm']:.2f} N m (true {db['true_half_width_Nm']:g}); RMS error "
+        f"{db['rms_error_Nm']:.3g} N m within +-{db['span_Nm']:g} N m",
+        f"  Hammerstein free-run fit on held-out data: {h['fit_percent']:.2f} % "
+        f"(reference {h['reference_fit_percent']:.2f} %)",
+    ]
+    return "\n".join(lines)
 
 
 _DESCRIPTION = """\
-A Hammerstein model of DATA (input u = --x, output y = --y): the linear part by
-the correlation approach, the nonlinearity by eq. 14 -- up to an affine map unless
---known gives two points where it is known (the paper's two-point normalisation);
-flexarm.ident.HammersteinIdentifier. The correlation approach assumes a white
-(i.i.d.) input.
+A Hammerstein model of DATA (input u = --x, output y = --y), reported beside the
+best linear ARX model of the same data (flexarm.ident.HammersteinIdentifier).
+--method auto (default) tests the input for whiteness (Ljung-Box, McLeod-Li):
+a white input takes the paper's path (the linear part by the correlation
+approach, the nonlinearity by eq. 14); any other input the correlated-input
+path (over-parameterised ARX on a piecewise-linear basis for the nonlinearity,
+rank-one separation, instrumental variables; order and knots chosen on held-out
+blocks, every fourth of twenty). The nonlinearity is up to an affine map unless --known
+gives two points where it is known (the paper's two-point normalisation).
 
 Without DATA: the robot experiment (paper section IX): a nonlinear flexible joint
 driven by a random torque for --duration s (--seed), its stiffness, friction and
 drive curves identified and compared with the truth
-(flexarm.studies.joint_identification).
+(flexarm.studies.joint_identification). --design sizes the experiment to resolve
+the drive's dead band (commands concentrated near it, the duration from a pilot
+run; the pilot and the experiment draw from default_rng(S).spawn(2)) and
+identifies it on the correlated-input path.
 """
 
 _EPILOG = """\
 output: with --out DIR (new or empty), all at once: for DATA nonlinearity.csv
-(u,phi), impulse_response.csv (lag,impulse_response), hammerstein.png and
-summary.json; for the robot experiment summary.json, curves.npz and
-identify_joint.png. --json prints the summary on stdout.
+(u,phi; with --bootstrap also phi_low,phi_high), impulse_response.csv
+(lag,impulse_response[,low,high]), hammerstein.png and summary.json (path and
+why, whiteness, structure, baseline, warnings); for the robot experiment
+summary.json, curves.npz and identify_joint.png. --json prints the summary on
+stdout.
 """
 
 
@@ -193,6 +283,7 @@ def add_parser(isub: Any) -> None:
     )
     p.add_argument("data", nargs="?", metavar="DATA", help="data file (.csv, .npz or text)")
     p.add_argument("--lags", type=positive_int(2), metavar="N", help="impulse response length (40)")
+    p.add_argument("--seed", type=int, metavar="S", help="seed: bootstrap, or robot (default 0)")
     p.add_argument("--out", metavar="DIR", help="write the results into DIR (new or empty)")
     p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
     d = p.add_argument_group("with DATA")
@@ -201,7 +292,21 @@ def add_parser(isub: Any) -> None:
         d.add_argument("--y", metavar="COL", help="output column: name or index (1)"),
         d.add_argument("--drop-nan", action="store_true", help="drop rows with NaN"),
         d.add_argument(
-            "--order", type=parse_order, metavar="bic|aic|N", help="ARMA order (default bic)"
+            "--method",
+            choices=METHODS,
+            help="path: auto (by the whiteness test), white, correlated (default auto)",
+        ),
+        d.add_argument(
+            "--order",
+            type=parse_order,
+            metavar="auto|bic|aic|N",
+            help="ARMA order (auto: BIC on the white path, held-out on the correlated)",
+        ),
+        d.add_argument(
+            "--knots", type=parse_knots, metavar="auto|N", help="correlated path: knots of phi"
+        ),
+        d.add_argument(
+            "--bootstrap", type=positive_int(10), metavar="B", help="bootstrap bands, B replicates"
         ),
         d.add_argument(
             "--known",
@@ -214,10 +319,14 @@ def add_parser(isub: Any) -> None:
     robot_options = [
         r.add_argument("--duration", type=float, metavar="SECONDS", help="record (default 60)"),
         r.add_argument(
+            "--design",
+            action="store_true",
+            help="design the excitation to resolve the drive's dead band (sets the duration)",
+        ),
+        r.add_argument(
             "--torque-sensor",
             action="store_true",
             help="a joint torque sensor measures tau_s (default: motor balance)",
         ),
-        r.add_argument("--seed", type=int, metavar="S", help="seed (default 0)"),
     ]
     p.set_defaults(func=_run(data_options, robot_options))

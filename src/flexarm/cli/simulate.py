@@ -169,19 +169,23 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     try:
         result = simulate(scenario.arm, **scenario.simulate_kwargs(), progress=None)
+        diverged = None
     except (InvalidValueError, InvalidTypeError) as exc:  # e.g. a path outside the workspace
         raise UsageError(f"flexarm simulate: error: {scenario.source}: {exc}") from None
-    except SimulationError as exc:
-        print(
-            f"flexarm simulate: the simulation diverged at t = {exc.time:.6g} s (state "
-            "non-finite, overflowing or a tip deflection beyond max_deflection); nothing written",
-            file=sys.stderr,
-        )
-        return EXIT_FAILURE
+    except SimulationError as exc:  # the partial run is a result too: kept, marked
+        result, diverged = exc.result, exc
+    metrics: dict[str, object] = dict(result.metrics())
+    if diverged is not None:  # the metrics of a run that did not finish mean nothing
+        metrics = dict.fromkeys(metrics)
     summary = json_ready(
         {
-            "status": "ok",
-            **result.metrics(),
+            "status": "ok" if diverged is None else "diverged",
+            **metrics,
+            **(
+                {}
+                if diverged is None
+                else {"diverged_at_s": diverged.time, "last_state": diverged.state}
+            ),
             "settings": scenario.description,
             "run": result.info,
             "out": args.out,
@@ -194,6 +198,16 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         except OSError as exc:
             print(f"flexarm simulate: error: cannot write {str(out)!r}: {exc}", file=sys.stderr)
             return EXIT_FAILURE
+    if diverged is not None:
+        kept = f"; the run up to then is in {out}" if out is not None else "; nothing written"
+        print(
+            f"flexarm simulate: the simulation diverged at t = {diverged.time:.6g} s (state "
+            f"non-finite, overflowing or a tip deflection beyond max_deflection){kept}",
+            file=sys.stderr,
+        )
+        if args.json:
+            print(json.dumps(summary, indent=2))
+        return EXIT_FAILURE
     if args.json:
         print(json.dumps(summary, indent=2))
     else:

@@ -3,9 +3,16 @@
 * :mod:`~flexarm.ident.regression` — the estimators of ``E[Y | X = x]`` (eq. 14),
   their streaming state in :mod:`~flexarm.ident.accumulators` (one per mode);
 * :mod:`~flexarm.ident.bandwidth` — the default-bandwidth rule (Silverman's);
-* :mod:`~flexarm.ident.hammerstein` — Hammerstein identification by the
-  correlation approach (:mod:`~flexarm.ident.correlation`,
-  :mod:`~flexarm.ident.lags`), ARMA fitting in :mod:`~flexarm.ident.arma`,
+* :mod:`~flexarm.ident.hammerstein` — Hammerstein identification for any
+  exciting input: the paper's correlation approach for a white input
+  (:mod:`~flexarm.ident.correlation`, :mod:`~flexarm.ident.lags`, ARMA fitting
+  in :mod:`~flexarm.ident.arma`), the ARX-Hammerstein path for a correlated one
+  (:mod:`~flexarm.ident.correlated`: :mod:`~flexarm.ident.hatbasis`,
+  :mod:`~flexarm.ident.arx`, :mod:`~flexarm.ident.selection`), the choice by
+  :mod:`~flexarm.ident.whiteness`, the linear baseline
+  :mod:`~flexarm.ident.linear`, predictions and scores in
+  :mod:`~flexarm.ident.prediction`, bootstrap bands in
+  :mod:`~flexarm.ident.bootstrap`, the fit's :mod:`~flexarm.ident.report`;
   test systems in :mod:`~flexarm.ident.systems`;
 * :mod:`~flexarm.ident.convergence` — the Monte Carlo rate study;
 * :mod:`~flexarm.ident.data` — reading columns of data files;
@@ -25,18 +32,27 @@ from .._lazy import attach
 _SUBMODULES = (
     "accumulators",
     "arma",
+    "arx",
     "bandwidth",
     "binning",
+    "bootstrap",
     "convergence",
+    "correlated",
     "correlation",
     "data",
     "fits",
     "hammerstein",
+    "hatbasis",
     "kernels",
     "lags",
+    "linear",
     "options",
+    "prediction",
     "regression",
+    "report",
+    "selection",
     "systems",
+    "whiteness",
 )
 _NAMES = {
     "KERNELS": "options",
@@ -64,6 +80,15 @@ _NAMES = {
     "arma_from_impulse_response": "arma",
     "two_point_normalisation": "correlation",
     "HammersteinIdentifier": "hammerstein",
+    # any exciting input (issue 17)
+    "Bands": "bootstrap",
+    "IdentificationReport": "report",
+    "IdentificationWarning": "whiteness",
+    "LinearARX": "linear",
+    "Selection": "selection",
+    "WhitenessReport": "whiteness",
+    "r2_score": "prediction",
+    "whiteness_test": "whiteness",
     # Monte Carlo rate study (issue 6)
     "ConvergenceResult": "convergence",
     "convergence_study": "convergence",
@@ -84,6 +109,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run
     from .arma import arma_from_impulse_response as arma_from_impulse_response
     from .bandwidth import Silverman as Silverman
     from .bandwidth import silverman_bandwidth as silverman_bandwidth
+    from .bootstrap import Bands as Bands
     from .convergence import ConvergenceResult as ConvergenceResult
     from .convergence import convergence_study as convergence_study
     from .correlation import two_point_normalisation as two_point_normalisation
@@ -96,12 +122,16 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run
     from .fits import fit_regression as fit_regression
     from .hammerstein import HammersteinIdentifier as HammersteinIdentifier
     from .kernels import evaluate_kernel as evaluate_kernel
+    from .linear import LinearARX as LinearARX
     from .options import BANDWIDTH_RULES as BANDWIDTH_RULES
     from .options import KERNELS as KERNELS
+    from .prediction import r2_score as r2_score
     from .regression import NadarayaWatson as NadarayaWatson
     from .regression import NotFittedError as NotFittedError
     from .regression import RecursiveKernelRegression as RecursiveKernelRegression
     from .regression import SemiRecursiveKernelRegression as SemiRecursiveKernelRegression
+    from .report import IdentificationReport as IdentificationReport
+    from .selection import Selection as Selection
     from .systems import ARMA as ARMA
     from .systems import EXAMPLE_ARMA as EXAMPLE_ARMA
     from .systems import Cubic as Cubic
@@ -113,3 +143,6 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run
     from .systems import Sign as Sign
     from .systems import fit_percent as fit_percent
     from .systems import simulate_hammerstein as simulate_hammerstein
+    from .whiteness import IdentificationWarning as IdentificationWarning
+    from .whiteness import WhitenessReport as WhitenessReport
+    from .whiteness import whiteness_test as whiteness_test

@@ -2,7 +2,8 @@
 
 * :func:`fit_regression` — the semi-recursive estimate (eq. 14) of ``E[y | x]``
   on a grid spanning the inputs (:class:`RegressionFit`);
-* :func:`fit_hammerstein` — a Hammerstein model of ``u -> y``
+* :func:`fit_hammerstein` — a Hammerstein model of ``u -> y`` for any
+  exciting input, beside its linear baseline, with optional bootstrap bands
   (:class:`HammersteinFit`).
 
 ``flexarm identify fit`` and ``flexarm identify hammerstein DATA`` are these
@@ -25,6 +26,7 @@ from .._io import atomic_path
 from .._validation import check_array, check_int
 from ..errors import InvalidValueError
 from .bandwidth import Silverman, as_rule
+from .bootstrap import Bands
 from .correlation import KnownPoints
 from .hammerstein import DEFAULT_BANDWIDTH, HammersteinIdentifier
 from .kernels import KernelFunction
@@ -253,14 +255,18 @@ class HammersteinFit:
         The data (units ``u_unit``, ``y_unit``).
     y_hat : ndarray, shape (n,)
         Free-run output of the model (units ``y_unit``).
+    y_baseline : ndarray, shape (n,)
+        Free-run output of the linear baseline (units ``y_unit``).
     grid : ndarray, shape (g,)
         Points spanning ``u`` where ``phi`` is reported (units ``u_unit``).
     phi : ndarray, shape (g,)
         The identified nonlinearity on ``grid``.
     model : HammersteinIdentifier
-        The fitted identifier.
+        The fitted identifier (``model.report_``: path, reason, baseline, warnings).
     fit_percent : float
         Free-run fit on the data, percent.
+    bands : Bands or None
+        Bootstrap bands of ``phi`` and the impulse response, if asked for.
     u_label, y_label, u_unit, y_unit : str
         Names and units for the axes.
     """
@@ -268,10 +274,12 @@ class HammersteinFit:
     u: F64
     y: F64
     y_hat: F64
+    y_baseline: F64
     grid: F64
     phi: F64
     model: HammersteinIdentifier
     fit_percent: float
+    bands: Bands | None = None
     u_label: str = "u"
     y_label: str = "y"
     u_unit: str = "data units"
@@ -283,24 +291,37 @@ class HammersteinFit:
         return "two-point" if self.model.known_points is not None else "up to an affine map"
 
     def summary(self) -> dict[str, Any]:
-        """Settings and results as plain Python values."""
+        """Settings and results as plain Python values (the report included)."""
         m = self.model
+        report = m.report_.summary()
         return {
             "n_samples": int(self.u.shape[0]),
+            "method": m.method_,
+            "reason": report["reason"],
+            "whiteness": report["whiteness"],
             "n_lags": m.n_lags,
             "known_points": m.known_points,
             "normalisation": self.normalisation,
-            "bandwidth": m.bandwidth_,
+            "bandwidth": m.bandwidth_ if m.method_ == "white" else None,
             "arma_order": m.order_,
+            "n_knots": int(m.grid_.shape[0]) if m.method_ == "correlated" else None,
+            "structure": report["structure"],
             "a": list(m.arma_.a),
             "b": list(m.arma_.b),
             "impulse_response": m.impulse_response_.tolist(),
             "fit_percent": self.fit_percent,
+            "baseline": report["baseline"],
+            "nonlinear_helps": report["nonlinear_helps"],
+            "loses_to_baseline": report["loses_to_baseline"],
+            "warnings": report["warnings"],
+            "bands": None if self.bands is None else self.bands.summary(),
             "nonlinearity": {"x": self.grid.tolist(), "phi": self.phi.tolist()},
         }
 
     def plot(self, fig: Figure | None = None) -> Figure:
-        """Three panels: the nonlinearity, the impulse response, measured vs free-run output.
+        """Three panels: the nonlinearity, the impulse response (with their bootstrap bands
+        when computed), and the measured output beside the model's and the linear
+        baseline's free runs.
 
         Parameters
         ----------
@@ -311,31 +332,47 @@ class HammersteinFit:
         -------
         matplotlib.figure.Figure
         """
+        from .bootstrap import draw_impulse_band, draw_phi_band
+
         if fig is None:
             fig = _new_figure((11, 4))
         ax1, ax2, ax3 = fig.subplots(1, 3)
         scale = "phi units" if self.model.known_points is not None else "normalised"
-        ax1.plot(self.grid, self.phi, lw=2)
+        if self.bands is not None:
+            draw_phi_band(ax1, self.bands)
+            draw_impulse_band(ax2, self.bands)
+        ax1.plot(self.grid, self.phi, lw=2, label="estimate")
         ax1.set_xlabel(f"{self.u_label} ({self.u_unit})")
         ax1.set_ylabel(f"identified nonlinearity phi ({scale})")
-        ax1.set_title(self.normalisation)
+        ax1.set_title(f"{self.normalisation}; {self.model.method_}-input path", fontsize=9)
         ir = self.model.impulse_response_
-        ax2.stem(np.arange(ir.shape[0]), ir)
+        ax2.plot(np.arange(ir.shape[0]), ir, "o-", ms=3, lw=1, label="estimate")
         ax2.set_xlabel("lag k (samples)")
         ax2.set_ylabel(f"impulse response lambda_k ({self.y_unit} per phi unit)")
-        ax2.set_title(f"impulse response (ARMA order {self.model.order_})")
+        ax2.set_title(f"impulse response (ARMA order {self.model.order_})", fontsize=9)
+        if self.bands is not None:
+            ax1.legend(fontsize=8)
+            ax2.legend(fontsize=8)
         shown = slice(0, min(self.u.shape[0], 2000))
-        ax3.plot(self.y[shown], lw=1, label="measured")
-        ax3.plot(self.y_hat[shown], lw=1, label="model (free run)")
+        base = self.model.report_.baseline
+        ax3.plot(self.y[shown], lw=1, color="k", label="measured")
+        ax3.plot(self.y_hat[shown], lw=1, label=f"Hammerstein ({self.fit_percent:.1f} %)")
+        ax3.plot(
+            self.y_baseline[shown],
+            lw=0.8,
+            ls="--",
+            label=f"linear ARX ({base['fit_percent']:.1f} %)",
+        )
         ax3.set_xlabel("n (samples)")
         ax3.set_ylabel(f"{self.y_label} ({self.y_unit})")
-        ax3.set_title(f"fit {self.fit_percent:.1f} %")
+        ax3.set_title("free run on the data", fontsize=9)
         ax3.legend(fontsize=8)
         return fig
 
     def save(self, directory: str | os.PathLike[str]) -> list[Path]:
         """Write ``nonlinearity.csv`` (``u,phi``), ``impulse_response.csv``
-        (``lag,impulse_response``) and ``hammerstein.png`` into ``directory``.
+        (``lag,impulse_response``; with bands, ``u,phi,phi_low,phi_high`` and
+        ``lag,impulse_response,low,high``) and ``hammerstein.png`` into ``directory``.
 
         Returns
         -------
@@ -346,8 +383,16 @@ class HammersteinFit:
         out.mkdir(parents=True, exist_ok=True)
         paths = [out / "nonlinearity.csv", out / "impulse_response.csv", out / "hammerstein.png"]
         ir = self.model.impulse_response_
-        _write_csv(paths[0], [self.grid, self.phi], "u,phi")
-        _write_csv(paths[1], [np.arange(ir.shape[0], dtype=np.float64), ir], "lag,impulse_response")
+        lags = np.arange(ir.shape[0], dtype=np.float64)
+        b = self.bands
+        if b is None:
+            _write_csv(paths[0], [self.grid, self.phi], "u,phi")
+            _write_csv(paths[1], [lags, ir], "lag,impulse_response")
+        else:
+            _write_csv(paths[0], [b.grid, b.phi, b.phi_low, b.phi_high], "u,phi,phi_low,phi_high")
+            _write_csv(
+                paths[1], [lags, ir, b.impulse_low, b.impulse_high], "lag,impulse_response,low,high"
+            )
         _write_png(self.plot(), paths[2])
         return paths
 
@@ -357,9 +402,13 @@ def fit_hammerstein(
     y: ArrayLike,
     *,
     n_lags: int = 40,
-    order: int | str = "bic",
+    order: int | str = "auto",
     known_points: KnownPoints | None = None,
     bandwidth: float | str | Silverman = DEFAULT_BANDWIDTH,
+    method: str = "auto",
+    n_knots: int | str = "auto",
+    bootstrap: int = 0,
+    rng: np.random.Generator | int | None = None,
     grid: int = 201,
     u_label: str = "u",
     y_label: str = "y",
@@ -369,9 +418,14 @@ def fit_hammerstein(
     Parameters
     ----------
     u, y : array_like, shape (n,)
-        Input (i.i.d. for the correlation approach to be exact) and output.
-    n_lags, order, known_points, bandwidth
+        Input (white or not: ``method``) and output.
+    n_lags, order, known_points, bandwidth, method, n_knots
         As :class:`~flexarm.ident.HammersteinIdentifier`.
+    bootstrap : int, default 0
+        Block-bootstrap replicates for the bands of ``phi`` and the impulse
+        response (0: none; otherwise >= 10), drawn from ``rng``.
+    rng : numpy.random.Generator or int, optional
+        Source of the bootstrap resampling.
     grid : int, default 201
         Points, spanning ``u``, where the nonlinearity is reported (>= 2).
     u_label, y_label : str
@@ -384,18 +438,27 @@ def fit_hammerstein(
     owner = "fit_hammerstein"
     ua, ya = _xy(u, y, owner, ("u", "y"))
     g = check_int(grid, "grid", owner, minimum=2)
+    boot = check_int(bootstrap, "bootstrap", owner, minimum=0)
     model = HammersteinIdentifier(
-        n_lags=n_lags, order=order, known_points=known_points, bandwidth=bandwidth
+        n_lags=n_lags,
+        order=order,
+        known_points=known_points,
+        bandwidth=bandwidth,
+        method=method,
+        n_knots=n_knots,
     ).fit(ua, ya)
     points = np.linspace(float(ua.min()), float(ua.max()), g)
+    bands = model.bands(ua, ya, n_boot=boot, rng=rng) if boot else None
     return HammersteinFit(
         u=ua,
         y=ya,
         y_hat=model.predict(ua),
+        y_baseline=model.baseline_.predict(ua),
         grid=points,
         phi=model.nonlinearity(points),
         model=model,
-        fit_percent=model.score(ua, ya),
+        fit_percent=model.fit_percent(ua, ya),
+        bands=bands,
         u_label=u_label,
         y_label=y_label,
     )

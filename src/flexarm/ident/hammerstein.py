@@ -1,118 +1,87 @@
-r"""Nonparametric identification of Hammerstein systems (paper §5, Fig. 5).
+r"""Nonparametric identification of Hammerstein systems (paper §5, Fig. 5), for any input.
 
 Model: ``W_n = phi(X_n) + xi_n``, ``Y_n = sum_k lambda_k W_{n-k}`` (a stable ARMA
-subsystem, :mod:`flexarm.ident.systems`), the input ``X_n`` i.i.d.
+subsystem, :mod:`flexarm.ident.systems`). :class:`HammersteinIdentifier` has two
+paths and tells which it took (``method_``, ``report_``):
 
-Method
-------
-For an i.i.d. input, every lag ``k >= 0`` gives the regression
+* **White input: the paper's correlation approach** (exact for i.i.d. input,
+  streaming). For every lag ``k``, ``m_k(x) = E[Y_{n+k} | X_n = x] =
+  lambda_k phi(x) + c_k``: the centred lag regressions, each the paper's
+  semi-recursive kernel estimate (eq. 14) on a grid, form a rank-one array.
+  The impulse response is the covariance with an instrument (``"auto"``: the
+  leading singular pair, which also serves an even ``phi`` and a delayed linear
+  part; ``"regression"``: ``m_0``, the paper's; ``"input"``: ``x``), the shape
+  of ``phi`` their least-squares combination, normalised by two known points
+  (the paper's ``d1``, ``alpha``) or else with the impulse response's largest
+  entry ``+1`` and ``phi`` of mean zero; the ARMA coefficients come from the
+  impulse response (:mod:`flexarm.ident.arma`, order by BIC). Steps:
+  :mod:`flexarm.ident.lags`, :func:`flexarm.ident.correlation.solve`.
+* **Correlated input** (:mod:`flexarm.ident.correlated`): the ARX-Hammerstein
+  structure fitted directly — over-parameterised least squares on a
+  piecewise-linear basis for ``phi`` with knots at the input's quantiles,
+  Bai's rank-one separation, instrumental variables kept when they lower the
+  output error (:mod:`flexarm.ident.arx`); order and knots by the
+  one-standard-error rule on held-out free-run error
+  (:mod:`flexarm.ident.selection`). Still nonparametric in ``phi``.
 
-.. math:: m_k(x) = E[Y_{n+k} \mid X_n = x] = \lambda_k \varphi(x) + c_k ,
+``method="auto"`` (default) takes the white path when the input passes the
+whiteness test (:func:`~flexarm.ident.whiteness.whiteness_test`: Ljung–Box and
+McLeod–Li) and the record is long enough for it, the correlated path
+otherwise. Forcing ``method="white"`` on a coloured input warns
+(:class:`~flexarm.ident.whiteness.IdentificationWarning`). Every fit is reported
+beside its linear baseline (:class:`~flexarm.ident.LinearARX`, same data); a
+model that loses to it is flagged and warned about.
 
-so the centred lag regressions ``m_k - E m_k(X)`` form a rank-one array
-``lambda_k (phi(x) - E phi(X))``. :class:`HammersteinIdentifier` estimates
-each ``m_k``, ``k = 0 .. n_lags - 1``, by the paper's semi-recursive kernel
-estimate (eq. 14, :class:`~flexarm.ident.SemiRecursiveKernelRegression` in grid
-mode) and then:
+Defaults and scale (white path)
+-------------------------------
+Bandwidth ``Silverman(0.55)``: 0.55 times Silverman's rule on the first
+``warmup`` inputs (:mod:`flexarm.ident.bandwidth`), narrow enough for jumps of
+``phi``; the grid spans those inputs widened by 10 % per side, and the estimate
+is held at its end values beyond it. Nothing depends on the units of ``u`` or ``y``.
 
-1. **Linear part, correlation approach.** ``lambda_k`` up to scale is the
-   covariance of ``Y_{n+k}`` with an *instrument* ``psi(X_n)``,
-   ``cov(Y_{n+k}, psi(X_n)) = lambda_k cov(phi(X), psi(X))``, estimated as
-   ``sum_g p_g psi(x_g) (m_k(x_g) - mean_k)`` over the grid with the kernel
-   density weights ``p_g`` (the regressions' denominators). Instruments:
-
-   * ``"input"``: ``psi(x) = x`` — the classical choice; it fails when
-     ``cov(phi(X), X) = 0``, e.g. an even ``phi`` with a symmetric input;
-   * ``"regression"``: ``psi = m_0``, the estimated regression function itself
-     (the paper's suggestion): works for even ``phi`` as long as ``lambda_0 =
-     b0 != 0``;
-   * ``"auto"`` (default): ``psi`` = the estimated ``phi`` itself, i.e. the
-     fixed point of "instrument -> impulse response -> combined shape ->
-     instrument", computed in closed form as the leading singular pair of the
-     density-weighted array ``sqrt(p_g) (m_k(x_g) - mean_k)``. It is the best
-     instrument (``cov(phi, psi)`` largest), works for even ``phi`` and for a
-     delayed linear part (``b0 = 0``).
-
-2. **Nonlinearity.** The shape ``psi(x) = sum_k lambda_k (m_k(x) - mean_k) /
-   sum_k lambda_k**2`` (the least-squares combination of the lag
-   regressions; with ``n_lags = 1`` it is the paper's ``m_n`` itself) is
-   ``phi`` up to an affine map. With ``known_points = ((x1, phi1), (x2,
-   phi2))`` the paper's two-point normalisation fixes it:
-   ``d1 = (psi(x1) - psi(x2)) / (phi1 - phi2)``, ``alpha = psi(x1) - d1 phi1``,
-   ``phi_n(x) = (psi(x) - alpha) / d1``, and the impulse response is scaled
-   accordingly (``lambda_k d1``). **Without known points** ``phi`` and the
-   impulse response are identified only up to ``phi -> s phi + t``,
-   ``lambda -> lambda / s``: the estimate is then normalised so that the
-   impulse response's entry of largest magnitude is ``+1`` and
-   ``phi`` has mean zero under the input distribution; the output offset this
-   leaves is carried by ``offset_`` so that :meth:`~HammersteinIdentifier.predict`
-   still reproduces the output.
-
-3. **ARMA coefficients** from the impulse response
-   (:func:`~flexarm.ident.arma.arma_from_impulse_response`): for each order
-   ``l = 0 .. max_order`` (the paper's ``ARMA(l, l)``), Prony's start refined
-   by nonlinear least squares; the order minimising BIC (by default) is kept.
-
-Steps 1-3 are :func:`flexarm.ident.correlation.solve`.
-
-Defaults and scale
-------------------
-The default bandwidth is ``Silverman(0.55)`` (:mod:`flexarm.ident.bandwidth`):
-0.55 times Silverman's rule of thumb evaluated on the first ``warmup`` inputs,
-``h_1 = 0.55 * 0.9 min(sd, IQR/1.34) warmup**(decay - 1/5)`` — with the default
-``decay = 0.2``, ``h_1 = 0.495 min(sd, IQR/1.34)`` and every ``h_i`` is 0.55
-times the rule for the first ``i`` samples. The factor below 1 keeps jumps of
-``phi`` (quantizers, dead zones with a jump) resolved; ``bandwidth="silverman"``
-gives the rule itself. The grid spans the first ``warmup`` inputs' range
-widened by 10 % on each side: nothing depends on the units of ``u`` or ``y``.
-Outside the grid the estimate is held at its end values.
-
-Streaming
----------
-The state is the ``n_lags`` grid-mode regressions (running sums), the last
-``n_lags - 1`` inputs and sequential running sums of ``y``; the first
-``warmup`` samples are buffered until the scale is known. Samples enter every
-sum in arrival order, so :meth:`~HammersteinIdentifier.partial_fit` on chunks
-equals :meth:`~HammersteinIdentifier.fit` on the whole record bit for bit.
-The impulse response, nonlinearity and ARMA model are derived from the state
-when first asked for after an update. :meth:`~HammersteinIdentifier.save`
-writes that state (the lag regressions through their own state description,
-:mod:`flexarm.ident.accumulators`) and :meth:`~HammersteinIdentifier.load`
-resumes it exactly.
+Streaming and persistence
+-------------------------
+The white path's state is the lag regressions' running sums:
+:meth:`~HammersteinIdentifier.partial_fit` on chunks equals
+:meth:`~HammersteinIdentifier.fit` bit for bit, and
+:meth:`~HammersteinIdentifier.save` / :meth:`~HammersteinIdentifier.load`
+resume it exactly (the streaming state, :mod:`flexarm.ident.accumulators`).
+The correlated path needs the whole record (one :meth:`~HammersteinIdentifier.fit`);
+its fitted model is saved and loaded too (:mod:`flexarm.ident._hammerstein_io`).
 """
 
 from __future__ import annotations
 
-import json
 import os
-from collections.abc import Mapping
+import warnings
 from typing import Any, Self
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._io import atomic_path
-from .._validation import check_array, check_int, check_option, check_real
-from ..errors import InvalidTypeError, InvalidValueError
+from .._validation import check_array
+from ..errors import InvalidValueError
+from ._hammerstein_io import load, save
+from ._hammerstein_params import check_length, choose_path, correlated_orders, validate
 from ._params import HyperParameters
-from .accumulators import State
 from .arma import ARMAFit, arma_from_impulse_response
-from .bandwidth import Silverman, as_rule
-from .correlation import (
-    KnownPoints,
-    Solution,
-    check_known_points,
-    solve,
-    two_point_normalisation,
-)
-from .kernels import KERNELS
-from .lags import LagRegressions
-from .options import CRITERIA, INSTRUMENTS
+from .bandwidth import Silverman
+from .bootstrap import Bands, bootstrap_bands
+from .correlated import CorrelatedResult, solve_correlated
+from .correlation import KnownPoints, Solution, two_point_normalisation
+from .hatbasis import evaluate, locate
+from .lags import WHITE_MAX_ORDER, LagRegressions, solve_white
+from .linear import LinearARX
+from .prediction import check_input, check_record, max_lag, predict_output, r2_score
 from .regression import NotFittedError, SemiRecursiveKernelRegression
+from .report import IdentificationReport, build_report
+from .selection import Selection
 from .systems import ARMA, fit_percent
+from .whiteness import DEFAULT_ALPHA, IdentificationWarning
 
 __all__ = [
     "DEFAULT_BANDWIDTH",
+    "WHITE_MAX_ORDER",
     "ARMAFit",
     "HammersteinIdentifier",
     "arma_from_impulse_response",
@@ -122,17 +91,9 @@ __all__ = [
 
 F64 = NDArray[np.float64]
 _OWNER = "HammersteinIdentifier"
-_FORMAT = 1  # version of the save() file layout
 
 #: The default bandwidth: 0.55 times Silverman's rule on the first ``warmup`` inputs.
 DEFAULT_BANDWIDTH = Silverman(0.55)
-
-
-def _plain(value: Any) -> Any:
-    """NumPy scalars and arrays as plain Python values, for JSON."""
-    if isinstance(value, np.ndarray | np.generic):
-        return value.tolist()
-    raise TypeError(f"{type(value).__name__} is not JSON serialisable")
 
 
 class HammersteinIdentifier(HyperParameters):
@@ -141,60 +102,73 @@ class HammersteinIdentifier(HyperParameters):
     Parameters
     ----------
     n_lags : int, default 40
-        Length ``L`` of the estimated impulse response (lags ``0 .. L-1``); it
-        should cover the linear part's decay.
-    order : int or {"bic", "aic"}, default "bic"
-        ARMA order ``l`` of the linear part, or the criterion selecting it.
-    max_order : int, default 4
-        Largest order tried by the criterion; ``n_lags >= 2 max_order + 2``.
+        Length ``L`` of the impulse response reported (white path: estimated,
+        lags ``0 .. L-1``; it should cover the linear part's decay).
+    order : int or {"auto", "bic", "aic"}, default "auto"
+        ARMA order ``l``, or how to choose it: ``"auto"`` is BIC on the white path
+        and the held-out one-standard-error rule on the correlated path;
+        ``"bic"``/``"aic"`` apply to the white path only.
+    max_order : int, optional
+        Largest order tried (default 4 on the white path, 10 on the correlated
+        path and for the linear baseline); white path: ``n_lags >= 2 max_order + 2``.
     instrument : {"auto", "regression", "input"}, default "auto"
-        Instrument of the correlation approach (module docstring).
+        Instrument of the correlation approach (white path).
     kernel : str, default "epanechnikov"
-        Kernel of the lag regressions (:data:`flexarm.ident.KERNELS`).
+        Kernel of the lag regressions (white path; :data:`flexarm.ident.KERNELS`).
     bandwidth : float, "silverman" or Silverman, default Silverman(0.55)
-        ``h_1`` in units of ``u``, or a rule evaluated on the first ``warmup``
-        inputs (:mod:`flexarm.ident.bandwidth`; module docstring).
+        ``h_1`` in units of ``u``, or a rule on the first ``warmup`` inputs (white path).
     decay : float, default 0.2
-        ``h_i = h_1 i**-decay`` (``0 <= decay <= 1``; the paper's conditions
-        need ``decay > 0``).
+        ``h_i = h_1 i**-decay``, ``0 <= decay <= 1`` (white path).
     grid_size : int, default 101
-        Points of the grid on which the regressions are kept.
+        Grid points of the lag regressions (white path).
     known_points : ((x1, phi1), (x2, phi2)), optional
-        Two points where ``phi`` is known (``x1 != x2``, ``phi1 != phi2``):
-        the paper's two-point normalisation. Without them ``phi`` is returned
-        up to an affine map (module docstring).
+        Two points where ``phi`` is known (``x1 != x2``, ``phi1 != phi2``): the
+        paper's two-point normalisation; without them ``phi`` is identified up
+        to an affine map (module docstring).
     warmup : int, default 256
-        Samples buffered before the grid and a rule's bandwidth are fixed
-        (from those samples); :meth:`fit` needs at least this many.
+        Samples buffered before the grid and bandwidth are fixed (white path,
+        which needs ``n >= max(warmup, 4 n_lags)``).
+    method : {"auto", "white", "correlated"}, default "auto"
+        The path (module docstring).
+    n_knots : int or "auto", default "auto"
+        Knots of ``phi`` on the correlated path (``>= 2``; 2 is linear), or chosen.
+    validation_fraction : float, default 0.25
+        Trailing fraction held out to choose the correlated path's structure and
+        the baseline's order, in (0, 0.5].
+    alpha : float, default 0.001
+        Level of the whiteness test (:mod:`flexarm.ident.whiteness`).
 
     Attributes
     ----------
+    method_ : {"white", "correlated"}
+        The path used; ``report_`` says why.
+    report_ : IdentificationReport
+        Path, reason, whiteness, structure, fit beside the linear baseline, warnings.
+    whiteness_ : WhitenessReport or None
+        The input's whiteness (None after :meth:`partial_fit` alone).
+    baseline_ : LinearARX
+        The linear baseline fitted to the same record.
+    selection_ : Selection
+        Correlated path: the structures tried on held-out data.
     n_samples_ : int
         Samples seen.
-    bandwidth_ : float
-        ``h_1`` in use (units of ``u``).
-    grid_ : ndarray, shape (g,)
-        Grid points where the estimate is defined (points no sample reached
-        are dropped).
-    shape_ : ndarray, shape (g,)
-        The unnormalised shape ``psi`` on ``grid_``.
-    nonlinearity_ : ndarray, shape (g,)
-        The normalised ``phi`` on ``grid_``.
+    grid_, nonlinearity_, shape_ : ndarray, shape (g,)
+        Points (units of ``u``; the correlated path's knots), the normalised
+        ``phi`` there, and its unnormalised shape.
+    input_weights_ : ndarray, shape (g,)
+        Share of the inputs at each grid point (sums to 1).
     impulse_response_ : ndarray, shape (n_lags,)
-        ``lambda_0 .. lambda_{L-1}`` from the correlation approach.
+        ``lambda_0 .. lambda_{L-1}`` (normalised with ``phi``).
     arma_ : ARMA
-        Linear part fitted to ``impulse_response_``.
-    order_ : int
-        Its order ``l``.
-    criterion_ : dict of int to float
-        Information criterion per order tried.
+        The linear part; ``order_`` its order ``l``; ``criterion_`` the
+        criterion of each order tried (BIC/AIC, or held-out MSE).
     offset_ : float
-        Output offset added by :meth:`predict` (units of ``y``).
+        Output offset of :meth:`predict` (units of ``y``).
     singular_values_ : ndarray
-        Singular values of the weighted lag-regression array; a Hammerstein
-        system makes it rank one (``s[1] / s[0]`` small).
-    regressions_ : list of SemiRecursiveKernelRegression
-        The lag regressions ``m_k`` (grid mode).
+        Of the rank-one array (lag regressions, or the separated ``b c^T``);
+        ``s[1] / s[0]`` small for a Hammerstein system.
+    bandwidth_, regressions_ :
+        White path: ``h_1`` and the lag regressions (grid mode).
 
     Examples
     --------
@@ -203,8 +177,8 @@ class HammersteinIdentifier(HyperParameters):
     >>> u = rng.uniform(-2, 2, 20000)
     >>> y = simulate_hammerstein(Saturation(1.0), [0.5], [1.0, 0.0], u, noise_std=0.1, rng=rng)
     >>> est = HammersteinIdentifier(known_points=((0.0, 0.0), (1.5, 1.0))).fit(u, y)
-    >>> np.round(est.impulse_response_[:3], 1)
-    array([1. , 0.5, 0.2])
+    >>> est.method_, np.round(est.impulse_response_[:3], 1)
+    ('white', array([1. , 0.5, 0.2]))
     >>> np.round(est.nonlinearity([-0.5, 0.5, 1.5]), 1)
     array([-0.5,  0.5,  1. ])
     """
@@ -212,8 +186,8 @@ class HammersteinIdentifier(HyperParameters):
     def __init__(
         self,
         n_lags: int = 40,
-        order: int | str = "bic",
-        max_order: int = 4,
+        order: int | str = "auto",
+        max_order: int | None = None,
         instrument: str = "auto",
         kernel: str = "epanechnikov",
         bandwidth: float | str | Silverman = DEFAULT_BANDWIDTH,
@@ -221,6 +195,10 @@ class HammersteinIdentifier(HyperParameters):
         grid_size: int = 101,
         known_points: KnownPoints | None = None,
         warmup: int = 256,
+        method: str = "auto",
+        n_knots: int | str = "auto",
+        validation_fraction: float = 0.25,
+        alpha: float = DEFAULT_ALPHA,
     ) -> None:
         self.n_lags = n_lags
         self.order = order
@@ -232,68 +210,20 @@ class HammersteinIdentifier(HyperParameters):
         self.grid_size = grid_size
         self.known_points = known_points
         self.warmup = warmup
+        self.method = method
+        self.n_knots = n_knots
+        self.validation_fraction = validation_fraction
+        self.alpha = alpha
 
     def _validated(self) -> dict[str, Any]:
-        """The hyperparameters, checked (called by the first fit / partial_fit)."""
-        p: dict[str, Any] = {}
-        p["n_lags"] = check_int(self.n_lags, "n_lags", _OWNER, minimum=1)
-        p["max_order"] = check_int(self.max_order, "max_order", _OWNER, minimum=0)
-        if isinstance(self.order, str):
-            p["order"] = check_option(self.order, "order", _OWNER, CRITERIA)
-            top = p["max_order"]
-        else:
-            p["order"] = check_int(self.order, "order", _OWNER, minimum=0)
-            top = p["order"]
-        if p["n_lags"] < 2 * top + 2:
-            raise InvalidValueError(
-                f"The 'n_lags' parameter of {_OWNER} must be >= 2 * order + 2 = {2 * top + 2} "
-                f"to fit ARMA order {top}. Got {p['n_lags']} instead."
-            )
-        p["instrument"] = check_option(self.instrument, "instrument", _OWNER, INSTRUMENTS)
-        p["kernel"] = check_option(self.kernel, "kernel", _OWNER, KERNELS)
-        rule = as_rule(self.bandwidth, _OWNER)
-        p["bandwidth"] = (
-            rule
-            if rule is not None
-            else check_real(self.bandwidth, "bandwidth", _OWNER, positive=True)
-        )
-        decay = check_real(self.decay, "decay", _OWNER, nonnegative=True)
-        if decay > 1.0:
-            raise InvalidValueError(
-                f"The 'decay' parameter of {_OWNER} must be <= 1. Got {decay} instead."
-            )
-        p["decay"] = decay
-        p["grid_size"] = check_int(self.grid_size, "grid_size", _OWNER, minimum=8)
-        p["known_points"] = check_known_points(self.known_points, _OWNER)
-        p["warmup"] = check_int(self.warmup, "warmup", _OWNER, minimum=8)
-        return p
+        """The hyperparameters, checked (:func:`~flexarm.ident._hammerstein_params.validate`)."""
+        return validate(self)
 
     # ---------------------------------------------------------------- fitting
 
-    def _check_uy(self, u: ArrayLike, y: ArrayLike) -> tuple[F64, F64]:
-        arrays = []
-        for name, value in (("u", u), ("y", y)):
-            arr = check_array(value, name, _OWNER)
-            if arr.dtype.kind == "c":
-                raise InvalidTypeError(
-                    f"The '{name}' parameter of {_OWNER} must be real. Got complex."
-                )
-            if arr.ndim != 1:
-                raise InvalidValueError(
-                    f"The '{name}' parameter of {_OWNER} must be of shape (n,). "
-                    f"Got shape {arr.shape} instead."
-                )
-            arrays.append(np.ascontiguousarray(arr, dtype=np.float64))
-        ua, ya = arrays
-        if ya.shape[0] != ua.shape[0]:
-            raise InvalidValueError(
-                f"The 'y' parameter of {_OWNER} must have the length of u ({ua.shape[0]}). "
-                f"Got length {ya.shape[0]} instead."
-            )
-        return ua, ya
-
     def _reset(self) -> None:
-        for name in ("_params", "_frozen", "_lags", "_cache"):
+        for name in ("_params", "_frozen", "_lags", "_cache", "_path", "_result", "_report",
+                     "whiteness_", "baseline_", "_n_seen"):  # fmt: skip
             self.__dict__.pop(name, None)
 
     def fit(self, u: ArrayLike, y: ArrayLike) -> Self:
@@ -302,36 +232,76 @@ class HammersteinIdentifier(HyperParameters):
         Parameters
         ----------
         u : array_like, shape (n,)
-            Input ``X_n`` (i.i.d. for the correlation approach to be exact), any unit.
+            Input ``X_n`` (any unit), finite, not constant; ``n >= 100`` (the
+            held-out choices), and ``n >= max(warmup, 4 n_lags)`` for the white path.
         y : array_like, shape (n,)
-            Output ``Y_n``, any unit; ``n >= warmup`` and ``n >= 4 n_lags``.
+            Output ``Y_n`` (any unit), finite, not constant.
 
         Returns
         -------
         self
         """
-        ua, ya = self._check_uy(u, y)
-        params = self._validated()
-        need = max(params["warmup"], 4 * params["n_lags"])
-        if ua.shape[0] < need:
-            raise InvalidValueError(
-                f"The 'u' parameter of {_OWNER} must hold at least {need} samples "
-                f"(max(warmup, 4 * n_lags)). Got {ua.shape[0]} instead."
-            )
-        if np.ptp(ya) == 0.0:
-            raise InvalidValueError(
-                f"The 'y' parameter of {_OWNER} must vary with the input. Got a constant output."
-            )
+        ua, ya = check_record(u, y, _OWNER)
+        p = self._validated()
+        check_length(p, ua.shape[0])
+        check_record(ua, ya, _OWNER, varying=True)
+        path, reason, white = choose_path(p, ua)
         self._reset()
-        self.partial_fit(ua, ya)
-        self._solution()
+        notes: list[str] = []
+        if path == "white" and not white.white:
+            notes.append(f"the white-input path was forced on an input that is not white: {reason}")
+        baseline = LinearARX(
+            max_order=correlated_orders(p, baseline=True)[1],
+            validation_fraction=p["validation_fraction"],
+        )
+        if path == "white":
+            self.partial_fit(ua, ya)
+            baseline.fit(ua, ya)
+        else:
+            self._start_correlated(p, ua, ya)
+            baseline._fit(ua, ya, self._result.selection, p["n_lags"])
+        self.whiteness_ = white
+        self.baseline_ = baseline
+        self._report = build_report(
+            p,
+            path,
+            reason,
+            white,
+            self._solution(),
+            self.__dict__.get("_result"),
+            fit_percent(ya, self.predict(ua)),
+            baseline,
+            baseline.fit_percent(ua, ya),
+            notes,
+        )
+        for note in self._report.warnings:
+            warnings.warn(note, IdentificationWarning, stacklevel=2)
         return self
 
+    def _start_correlated(self, p: dict[str, Any], u: F64, y: F64) -> None:
+        order, top = correlated_orders(p)
+        self._params, self._frozen, self._path = p, self.get_params(), "correlated"
+        self._n_seen = int(u.shape[0])
+        self._result = solve_correlated(
+            u,
+            y,
+            n_lags=p["n_lags"],
+            order=order,
+            max_order=top,
+            n_knots=p["n_knots"],
+            known_points=p["known_points"],
+            validation_fraction=p["validation_fraction"],
+            owner=_OWNER,
+        )
+        self._cache = self._result.solution
+
     def partial_fit(self, u: ArrayLike, y: ArrayLike) -> Self:
-        """Add a chunk of the record; chunks give bit for bit what one :meth:`fit` gives.
+        """Add a chunk of the record to the white path; chunks give bit for bit what one fit gives.
 
         The hyperparameters are fixed by the first call; the first ``warmup``
-        samples are buffered until the grid and bandwidth can be set.
+        samples are buffered until the grid and bandwidth can be set. Streaming is
+        the white-input path's (the correlated path needs the whole record): it
+        keeps no whiteness test, baseline or report.
 
         Parameters
         ----------
@@ -344,11 +314,18 @@ class HammersteinIdentifier(HyperParameters):
         -------
         self
         """
-        ua, ya = self._check_uy(u, y)
+        ua, ya = check_record(u, y, _OWNER, 0)
+        if self.__dict__.get("_path") == "correlated" or self.method == "correlated":
+            raise InvalidValueError(
+                f"The 'method' parameter of {_OWNER} must be 'auto' or 'white' to stream with "
+                "partial_fit (the correlated-input path needs the whole record: call fit). "
+                "Got a correlated-path identifier instead."
+            )
         if "_params" not in self.__dict__:
             self._params = self._validated()
             self._frozen = self.get_params()
             self._lags = LagRegressions(self._params, _OWNER)
+            self._path = "white"
         else:
             now = self.get_params()
             changed = sorted(k for k in now if repr(now[k]) != repr(self._frozen[k]))
@@ -358,18 +335,55 @@ class HammersteinIdentifier(HyperParameters):
                     "partial_fit. Got new values instead; call fit to start again."
                 )
         self.__dict__.pop("_cache", None)
+        self.__dict__.pop("_report", None)
         self._lags.add_chunk(ua, ya)
         return self
+
+    # ---------------------------------------------------------------- state
+
+    @property
+    def method_(self) -> str:
+        """The path used: ``"white"`` or ``"correlated"``."""
+        path: str | None = self.__dict__.get("_path")
+        if path is None:
+            raise NotFittedError(f"This {_OWNER} instance is not fitted yet.")
+        return path
+
+    @property
+    def report_(self) -> IdentificationReport:
+        """What the last :meth:`fit` did (path, reason, structure, baseline, warnings)."""
+        report: IdentificationReport | None = self.__dict__.get("_report")
+        if report is None:
+            raise NotFittedError(
+                f"This {_OWNER} instance has no report: call 'fit' (partial_fit streams "
+                "without one)."
+            )
+        return report
+
+    @property
+    def selection_(self) -> Selection:
+        """Correlated path: the structures tried on held-out data and the choice."""
+        result: CorrelatedResult | None = self.__dict__.get("_result")
+        if result is None:
+            raise AttributeError(
+                f"{_OWNER}.selection_ exists after a correlated-path fit in this session "
+                "(a loaded identifier keeps its summary in report_.structure)."
+            )
+        return result.selection
 
     @property
     def n_samples_(self) -> int:
         """Samples seen."""
+        if self.__dict__.get("_path") == "correlated":
+            return int(self._n_seen)
         lags: LagRegressions | None = self.__dict__.get("_lags")
         if lags is None:
             raise NotFittedError(f"This {_OWNER} instance is not fitted yet.")
         return lags.n_samples
 
     def _started(self, name: str) -> LagRegressions:
+        if self.__dict__.get("_path") == "correlated":
+            raise AttributeError(f"{_OWNER}.{name} exists on the white-input path only.")
         lags: LagRegressions | None = self.__dict__.get("_lags")
         if lags is None or lags.regressions is None:
             raise NotFittedError(
@@ -379,19 +393,20 @@ class HammersteinIdentifier(HyperParameters):
 
     @property
     def bandwidth_(self) -> float:
-        """``h_1`` in use (units of ``u``), fixed after the first ``warmup`` samples."""
+        """``h_1`` in use (units of ``u``), fixed after ``warmup`` samples (white path)."""
         return self._started("bandwidth_").bandwidth
 
     @property
     def regressions_(self) -> list[SemiRecursiveKernelRegression]:
-        """The lag regressions ``m_k``, ``k = 0 .. n_lags - 1`` (grid mode)."""
+        """The lag regressions ``m_k``, ``k = 0 .. n_lags - 1`` (grid mode; white path)."""
         regs = self._started("regressions_").regressions
         assert regs is not None
         return regs
 
-    # ---------------------------------------------------------------- solution
-
-    def _check_fitted(self) -> LagRegressions:
+    def _solution(self) -> Solution:
+        cached: Solution | None = self.__dict__.get("_cache")
+        if cached is not None:
+            return cached
         lags: LagRegressions | None = self.__dict__.get("_lags")
         if lags is None or not lags.ready:
             raise NotFittedError(
@@ -399,30 +414,13 @@ class HammersteinIdentifier(HyperParameters):
                 "warmup + n_lags samples). Call 'fit' or 'partial_fit' with more data "
                 "before using this estimator."
             )
-        return lags
-
-    def _solution(self) -> Solution:
-        lags = self._check_fitted()
-        cached: Solution | None = self.__dict__.get("_cache")
-        if cached is not None:
-            return cached
-        p = self._params
-        sol = solve(
-            *lags.lag_sums(),
-            lags.grid,
-            instrument=p["instrument"],
-            known_points=p["known_points"],
-            order=p["order"],
-            max_order=p["max_order"],
-            mean_y=float(lags.sums[0] / lags.n_samples),
-            owner=_OWNER,
-        )
+        sol = solve_white(self._params, lags)
         self._cache = sol
         return sol
 
     @property
     def impulse_response_(self) -> F64:
-        """``lambda_0 .. lambda_{L-1}`` (correlation approach), shape (n_lags,)."""
+        """``lambda_0 .. lambda_{L-1}``, shape (n_lags,)."""
         return self._solution().impulse.copy()
 
     @property
@@ -432,17 +430,17 @@ class HammersteinIdentifier(HyperParameters):
 
     @property
     def shape_(self) -> F64:
-        """The unnormalised shape ``psi`` on :attr:`grid_`, shape (g,)."""
+        """The unnormalised shape of ``phi`` on :attr:`grid_`, shape (g,)."""
         return self._solution().shape.copy()
 
     @property
     def grid_(self) -> F64:
-        """Grid points (units of ``u``) where the estimate is defined, shape (g,)."""
+        """Points (units of ``u``) where ``phi`` is estimated, shape (g,)."""
         return self._solution().grid.copy()
 
     @property
     def input_weights_(self) -> F64:
-        """Kernel estimate of the input distribution on :attr:`grid_` (sums to 1), shape (g,)."""
+        """Share of the inputs at each point of :attr:`grid_` (sums to 1), shape (g,)."""
         return self._solution().weights.copy()
 
     @property
@@ -452,12 +450,17 @@ class HammersteinIdentifier(HyperParameters):
 
     @property
     def order_(self) -> int:
-        """The selected ARMA order ``l``."""
+        """The ARMA order ``l`` in use."""
         return self._solution().arma.order
 
     @property
+    def max_lag_(self) -> int:
+        """``max(p, q)``: the initial conditions :meth:`predict` takes from ``y``."""
+        return max_lag(self._solution().arma.model)
+
+    @property
     def criterion_(self) -> dict[int, float]:
-        """Information criterion of each order tried."""
+        """Criterion of each order tried (BIC/AIC, or the held-out MSE at the chosen knots)."""
         return dict(self._solution().arma.criterion)
 
     @property
@@ -467,11 +470,24 @@ class HammersteinIdentifier(HyperParameters):
 
     @property
     def singular_values_(self) -> F64:
-        """Singular values of the weighted lag-regression array (rank one if Hammerstein)."""
+        """Singular values of the rank-one array (rank one if Hammerstein)."""
         return self._solution().singular_values.copy()
 
+    # ---------------------------------------------------------------- model use
+
+    def _phi(self, x: F64) -> F64:
+        sol = self._solution()
+        if self.__dict__.get("_path") == "correlated":
+            return evaluate(*locate(x.ravel(), sol.grid), sol.nonlinearity).reshape(x.shape)
+        out: F64 = np.interp(x, sol.grid, sol.nonlinearity)
+        return out
+
     def nonlinearity(self, x: ArrayLike) -> F64:
-        """The identified ``phi`` at ``x`` (linear interpolation on the grid, held beyond it).
+        """The identified ``phi`` at ``x``.
+
+        White path: linear interpolation on the grid, held at the end values
+        beyond it. Correlated path: the piecewise-linear estimate, its end
+        segments continued beyond the knots (a linear ``phi`` stays linear).
 
         Parameters
         ----------
@@ -482,20 +498,27 @@ class HammersteinIdentifier(HyperParameters):
         -------
         ndarray, same shape as ``x``
         """
-        sol = self._solution()
-        xa = check_array(x, "x", f"{_OWNER}.nonlinearity")
-        out: F64 = np.interp(xa, sol.grid, sol.nonlinearity)
-        return out
+        self._solution()
+        return self._phi(check_array(x, "x", f"{_OWNER}.nonlinearity"))
 
-    def predict(self, u: ArrayLike) -> F64:
-        """Free-run output of the identified model for the input ``u`` (from rest).
+    def predict(
+        self, u: ArrayLike, y: ArrayLike | None = None, steps_ahead: int | None = None
+    ) -> F64:
+        """Output of the model ``offset_ + ARMA(phi_hat(u))``: free run or from data.
 
-        ``y_hat = ARMA(phi_hat(u)) + offset_``.
+        sysidentpy's convention (:mod:`flexarm.ident.prediction`): without ``y``
+        the free run from rest; with ``y`` its first :attr:`max_lag_` samples are
+        the initial conditions (returned as given) and, with ``steps_ahead = k``,
+        each ``y_n`` is predicted from the outputs measured up to ``n - k``.
 
         Parameters
         ----------
         u : array_like, shape (n,)
             Input sequence (units of ``u``).
+        y : array_like, shape (n,), optional
+            Measured output (units of ``y``).
+        steps_ahead : int, optional
+            ``k >= 1`` (needs ``y``); None: free run.
 
         Returns
         -------
@@ -503,72 +526,63 @@ class HammersteinIdentifier(HyperParameters):
             Predicted output (units of ``y``).
         """
         sol = self._solution()
-        ua = check_array(u, "u", f"{_OWNER}.predict", shape=(-1,))
-        w = np.interp(ua, sol.grid, sol.nonlinearity)
-        out: F64 = sol.arma.model.filter(w) + sol.offset
-        return out
+        owner = f"{_OWNER}.predict"
+        ua = check_input(u, owner)
+        return predict_output(
+            sol.arma.model, self._phi(ua), sol.offset, y, steps_ahead, owner=owner
+        )
 
-    def score(self, u: ArrayLike, y: ArrayLike) -> float:
-        """Fit in percent of :meth:`predict` on ``(u, y)`` (:func:`fit_percent`)."""
-        ua, ya = self._check_uy(u, y)
-        return fit_percent(ya, self.predict(ua))
+    def score(self, u: ArrayLike, y: ArrayLike, steps_ahead: int | None = None) -> float:
+        """R² of :meth:`predict` on ``(u, y)`` (scikit-learn's ``score``; 1 is perfect).
+
+        With ``steps_ahead``, of the k-step prediction; otherwise of the free run from rest.
+        """
+        ua, ya = check_record(u, y, f"{_OWNER}.score")
+        return r2_score(ya, self.predict(ua, ya if steps_ahead else None, steps_ahead))
+
+    def fit_percent(self, u: ArrayLike, y: ArrayLike, steps_ahead: int | None = None) -> float:
+        """Fit in percent, ``100 (1 - ||y - y_hat|| / ||y - mean y||)``, of :meth:`predict`.
+
+        With ``steps_ahead``, of the k-step prediction; otherwise of the free run from rest.
+        """
+        ua, ya = check_record(u, y, f"{_OWNER}.fit_percent")
+        return fit_percent(ya, self.predict(ua, ya if steps_ahead else None, steps_ahead))
+
+    def bands(
+        self,
+        u: ArrayLike,
+        y: ArrayLike,
+        *,
+        n_boot: int = 100,
+        level: float = 0.9,
+        block_length: int | None = None,
+        rng: np.random.Generator | int | None = None,
+    ) -> Bands:
+        """Bootstrap bands of ``phi`` and the impulse response on the record ``(u, y)``
+        it was fitted to: :func:`flexarm.ident.bootstrap.bootstrap_bands` (``n_boot``
+        circular-block replicates, pointwise ``level``, ``rng`` the resampling)."""
+        return bootstrap_bands(
+            self, u, y, n_boot=n_boot, level=level, block_length=block_length, rng=rng
+        )
 
     # ---------------------------------------------------------------- persistence
 
-    def _state(self) -> State:
-        """The one state description: hyperparameters (JSON) and the lag regressions' state."""
-        lags: LagRegressions | None = self.__dict__.get("_lags")
-        if lags is None:
-            raise NotFittedError(
-                f"This {_OWNER} instance is not fitted yet. Call 'fit' or 'partial_fit' "
-                "before saving it."
-            )
-        params = dict(self._frozen)
-        if isinstance(params["bandwidth"], Silverman):
-            params["bandwidth"] = {"silverman": params["bandwidth"].factor}
-        header: State = {
-            "format": np.array(_FORMAT),
-            "estimator": np.array(_OWNER),
-            "params": np.array(json.dumps(params, default=_plain)),
-        }
-        return {**header, **lags.state()}
-
-    @classmethod
-    def _from_state(cls, data: Mapping[str, NDArray[Any]]) -> Self:
-        if int(data.get("format", -1)) != _FORMAT or str(data.get("estimator")) != _OWNER:
-            raise InvalidValueError(
-                f"The 'path' parameter of {_OWNER}.load must name a file saved by "
-                f"{_OWNER}.save. Got {data.get('estimator', 'another file')!s} instead."
-            )
-        params = json.loads(str(data["params"]))
-        if isinstance(params["bandwidth"], dict):
-            params["bandwidth"] = Silverman(float(params["bandwidth"]["silverman"]))
-        if params["known_points"] is not None:
-            (x1, f1), (x2, f2) = params["known_points"]
-            params["known_points"] = ((x1, f1), (x2, f2))
-        est = cls(**params)
-        est._params = est._validated()
-        est._frozen = est.get_params()
-        est._lags = LagRegressions.from_state(est._params, _OWNER, data)
-        return est
-
     def save(self, path: str | os.PathLike[str]) -> None:
-        """Write the hyperparameters and the streaming state to ``path`` (NumPy ``.npz``).
+        """Write the identifier to ``path`` (NumPy ``.npz``, plain arrays, atomically).
 
-        Works at any point after the first :meth:`fit` or :meth:`partial_fit`
-        (also during the warmup); :meth:`load` resumes exactly, so
-        ``partial_fit`` after ``load`` gives bit for bit what it would have
-        given without stopping. Plain arrays only (no pickle), written
-        atomically as given (no suffix added).
+        White path: the hyperparameters and the streaming state, at any point
+        after the first :meth:`fit` or :meth:`partial_fit` (also during the
+        warmup); :meth:`load` resumes exactly, so ``partial_fit`` after ``load``
+        gives bit for bit what it would have given without stopping. Correlated
+        path: the fitted model. Both keep the report and the baseline of a
+        :meth:`fit`.
 
         Parameters
         ----------
         path : str or os.PathLike
-            Destination file.
+            Destination file (no suffix added).
         """
-        arrays: dict[str, Any] = self._state()
-        with atomic_path(path) as tmp, open(tmp, "wb") as f:
-            np.savez(f, **arrays)
+        save(self, path)
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Self:
@@ -584,6 +598,4 @@ class HammersteinIdentifier(HyperParameters):
         HammersteinIdentifier
             With the state it had when saved.
         """
-        with np.load(path, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-        return cls._from_state(data)
+        return load(cls, path)

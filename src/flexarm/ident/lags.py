@@ -23,9 +23,13 @@ from numpy.typing import NDArray
 from ..errors import InvalidValueError
 from .accumulators import State
 from .bandwidth import Silverman
+from .correlation import Solution, solve
 from .regression import SemiRecursiveKernelRegression
 
-__all__ = ["LagRegressions"]
+__all__ = ["WHITE_MAX_ORDER", "LagRegressions", "solve_white", "white_solution"]
+
+#: ``max_order=None``: the white path's largest ARMA order (BIC), as before the correlated path.
+WHITE_MAX_ORDER = 4
 
 F64 = NDArray[np.float64]
 
@@ -166,3 +170,25 @@ class LagRegressions:
             sub = {key[len(prefix) :]: v for key, v in state.items() if key.startswith(prefix)}
             lags.regressions.append(SemiRecursiveKernelRegression._from_state(sub))
         return lags
+
+
+def white_solution(params: Mapping[str, Any], u: F64, y: F64) -> Solution:
+    """The white path's model of one record (validated ``params``), without a report."""
+    lags = LagRegressions(params, "HammersteinIdentifier")
+    lags.add_chunk(u, y)
+    return solve_white(params, lags)
+
+
+def solve_white(params: Mapping[str, Any], lags: LagRegressions) -> Solution:
+    """The correlation approach on the lag regressions' sums (``correlation.solve``)."""
+    order = params["order"]
+    return solve(
+        *lags.lag_sums(),
+        lags.grid,
+        instrument=params["instrument"],
+        known_points=params["known_points"],
+        order="bic" if order == "auto" else order,
+        max_order=WHITE_MAX_ORDER if params["max_order"] is None else params["max_order"],
+        mean_y=float(lags.sums[0] / lags.n_samples),
+        owner="HammersteinIdentifier",
+    )

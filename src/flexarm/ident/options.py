@@ -14,6 +14,8 @@ __all__ = [
     "DISTRIBUTIONS",
     "INSTRUMENTS",
     "KERNELS",
+    "METHODS",
+    "ORDER_RULES",
     "REGRESSION_FUNCTIONS",
 ]
 
@@ -29,6 +31,13 @@ BANDWIDTH_RULES: tuple[str, ...] = ("silverman",)
 
 #: Information criteria that choose an ARMA order (:mod:`flexarm.ident.arma`).
 CRITERIA: tuple[str, ...] = ("bic", "aic")
+
+#: Order rules of :class:`~flexarm.ident.HammersteinIdentifier`: "auto" (BIC on the white
+#: path, held-out validation on the correlated path) or an information criterion.
+ORDER_RULES: tuple[str, ...] = ("auto", *CRITERIA)
+
+#: Identification paths of :class:`~flexarm.ident.HammersteinIdentifier`.
+METHODS: tuple[str, ...] = ("auto", "white", "correlated")
 
 #: Instruments of the Hammerstein correlation approach (:mod:`flexarm.ident.hammerstein`).
 INSTRUMENTS: tuple[str, ...] = ("auto", "regression", "input")

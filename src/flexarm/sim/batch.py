@@ -16,6 +16,17 @@ any keywords: ``{"arm": arm, "dt": 1e-4, "rng": 7}``) or a callable with no
 arguments that returns a :class:`~flexarm.sim.results.SimulationResult` (e.g.
 ``functools.partial(flexarm.simulate_open_loop, arm, t, torque)``).
 
+While a batch runs, the BLAS library under NumPy and SciPy is limited to one
+thread (:mod:`threadpoolctl`): the runs' small matrices (linearisations,
+Riccati equations, matrix exponentials) gain nothing from BLAS threads, which
+would only compete with the runs for the cores. The limit is process-wide and
+lasts until the batch ends (for :func:`iter_simulations`, until the generator is
+exhausted or closed).
+
+A batch that ends early (the first error with ``errors="raise"``, the caller
+closing the generator, ``KeyboardInterrupt``) stops the runs in flight at their
+next chunk (:func:`flexarm.simulate`'s ``stop``) and starts no other.
+
 Seeds: give each run its own seed (an int ``rng``), not a shared
 :class:`numpy.random.Generator` (runs in threads would draw from it in an order
 that depends on timing).
@@ -25,6 +36,7 @@ from __future__ import annotations
 
 import os
 import sys
+import threading
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 
@@ -55,9 +67,9 @@ def default_workers() -> int:
         return os.cpu_count() or 1
 
 
-def _callable(run: Run, index: int) -> Callable[[], SimulationResult]:
+def _callable(run: Run, index: int, stop: threading.Event) -> Callable[[], SimulationResult]:
     if isinstance(run, Mapping):
-        kwargs = dict(run)
+        kwargs = {"stop": stop, **run}
         if "arm" not in kwargs:
             raise InvalidTypeError(
                 f"The 'runs' parameter of {_OWNER} must hold mappings with an 'arm' (the "
@@ -114,7 +126,14 @@ def iter_simulations(
     source = iter(enumerate(runs))
     pending: dict[Future[SimulationResult], int] = {}
     done_count = 0
-    with ThreadPoolExecutor(max_workers=n_workers, thread_name_prefix="flexarm-run") as pool:
+    from threadpoolctl import threadpool_limits
+
+    stop = threading.Event()  # set when the batch ends early: runs in flight stop
+
+    with (
+        threadpool_limits(limits=1, user_api="blas"),
+        ThreadPoolExecutor(max_workers=n_workers, thread_name_prefix="flexarm-run") as pool,
+    ):
         try:
             while True:
                 while len(pending) < 2 * n_workers:
@@ -122,7 +141,7 @@ def iter_simulations(
                     if item is None:
                         break
                     index, run = item
-                    pending[pool.submit(_callable(run, index))] = index
+                    pending[pool.submit(_callable(run, index, stop))] = index
                 if not pending:
                     break
                 finished, _ = wait(pending, return_when=FIRST_COMPLETED)
@@ -139,6 +158,7 @@ def iter_simulations(
                     else:
                         yield index, future.result()
         finally:
+            stop.set()  # the batch is over: whatever still runs stops at its next chunk
             for future in pending:
                 future.cancel()
             if show:

@@ -41,12 +41,12 @@ from ..model.kinematics import lever_lengths
 from ..model.plant import Plant, check_plant
 from ..sensing.delays import DelayModel, discretize, pade_state_space
 from ..sensing.sensors import Sensor, check_sensor
-from .driver import LoopOutputs, run_in_chunks, run_scipy
+from .driver import LoopOutputs, StopFlag, run_in_chunks, run_scipy
 from .loop import SensorArrays, loop_state, prime_delay_line, run, sensor_arrays
 from .references import BLOCK, PathShaper, ReferencePipeline
 from .results import SimulationError, SimulationResult, assemble_result
 
-__all__ = ["SimulationError", "recorded_instants", "simulate"]
+__all__ = ["SimulationError", "check_budget", "recorded_instants", "simulate"]
 
 F64 = NDArray[np.float64]
 _OWNER = "simulate"
@@ -75,6 +75,7 @@ def simulate(
     smoothing: float = 0.0,
     check_sampling: bool = True,
     record_every: int = 1,
+    stop: StopFlag | None = None,
 ) -> SimulationResult:
     """Simulate ``arm`` under ``controller`` tracking ``trajectory``.
 
@@ -144,6 +145,10 @@ def simulate(
         default every instant). The run itself is the same; a long run then fits
         in bounded memory (the reference is computed block by block as it goes).
         The metrics are those of the recorded instants.
+    stop : threading.Event or alike, optional
+        Checked between chunks of the run (about every 2**15 control instants):
+        once set, the run ends with :class:`~flexarm.errors.Cancelled` (how an
+        interrupted batch stops its runs promptly).
 
     Returns
     -------
@@ -153,6 +158,8 @@ def simulate(
     ------
     SimulationError
         If the state diverges; the partial result is attached.
+    Cancelled
+        If ``stop`` was set before the run's end.
     InvalidValueError
         For a bad parameter, a path out of the arm's workspace, a control period
         at which the loop is sampled-data unstable, or a run that would need
@@ -209,7 +216,9 @@ def simulate(
         )
     n_rows = n_steps + 1
     ny = measurement_size(N, sum(arm.n_modes))
-    _check_budget(arm, sensor, delay, dt, substeps, n_steps, every, ny)
+    check_budget(
+        arm, sensor, delay, dt=dt, duration=duration, substeps=substeps, record_every=every
+    )
 
     # ------------------------------------------------------------ reference
     link, distance, _ = sensor.resolve(arm)
@@ -329,7 +338,12 @@ def simulate(
             return int(status), int(k)
 
         status, k_end = run_in_chunks(
-            chunk, n_rows, n_rows * substeps * n, progress, block=None if whole else BLOCK
+            chunk,
+            n_rows,
+            n_rows * substeps * n,
+            progress,
+            block=None if whole is not None and stop is None else BLOCK,
+            stop=stop,
         )
     else:
         assert whole is not None
@@ -408,19 +422,57 @@ def _sampled_reference(pipeline: ReferencePipeline, n_rows: int) -> F64:
     return np.concatenate(parts)
 
 
-def _check_budget(
+def check_budget(
     arm: Plant,
-    sensor: Sensor,
-    delay: DelayModel,
+    sensor: Sensor | None = None,
+    delay: DelayModel | None = None,
+    *,
     dt: float,
-    substeps: int,
-    n_steps: int,
-    every: int,
-    n_y: int,
+    duration: float,
+    substeps: int = 1,
+    record_every: int = 1,
+    runs: int = 1,
+    workers: int = 1,
+    owner: str = _OWNER,
+    remedy: str | None = None,
 ) -> None:
-    """Refuse a run that would need more memory or time than the limits allow."""
+    """Refuse runs that would need more memory or time than the limits allow.
+
+    :func:`simulate` checks each run before allocating anything; a batch (e.g.
+    ``flexarm reproduce``) checks all of its ``runs`` at once before the first, with
+    ``min(runs, 2 workers)`` runs in memory at a time and ``runs / workers`` runs'
+    time in all. Limits: :mod:`flexarm._budget` (``FLEXARM_MAX_MEMORY``,
+    ``FLEXARM_MAX_TIME``).
+
+    Parameters
+    ----------
+    arm : FlexibleArm
+    sensor : Sensor, optional
+        Default: the joint encoders.
+    delay : DelayModel, optional
+        Default: none.
+    dt, duration : float
+        Control period and simulated time, s.
+    substeps, record_every : int
+        As for :func:`simulate`.
+    runs, workers : int
+        Runs of this size, and how many run at once.
+    owner : str
+        Named in the message.
+    remedy : str, optional
+        What to change, for the message (default: in :func:`simulate`'s terms).
+
+    Raises
+    ------
+    InvalidValueError
+        Naming what the runs would need, what to change and how to raise the limit.
+    """
+    sensor = check_sensor(sensor, owner)
+    delay = DelayModel.none() if delay is None else delay
     N, n = arm.n_links, arm.n_dof
-    n_out = n_steps // every + 2
+    n_steps = max(1, round(duration / dt))
+    n_out = n_steps // record_every + 2
+    n_y = measurement_size(N, sum(arm.n_modes))
     # per recorded row: t, q, dq, tau, measurement, reference, desired, tip, and the
     # assembly's temporaries (about as much again)
     per_row = 8 * 2 * (1 + 2 * n + N + n_y + (6 + 4 * N) + 2 + 2)
@@ -431,22 +483,26 @@ def _check_budget(
     if delay.delay > 0 and delay.method == "exact":
         ring = 8.0 * n_ch * (delay.delay / h + 1)
     blocks = 8.0 * min(n_steps + 1, _WHOLE_REFERENCE_ROWS) * (6 + 4 * N + 2 + n_ch)
-    need = per_row * float(n_out) + ring + blocks
+    at_once = min(runs, 2 * workers)
+    what = f"{runs} runs of" if runs > 1 else "a run of"
     check_memory(
-        need,
-        f"a run of {n_steps + 1:.4g} control instants recording {n_out:.4g} rows"
-        + (f" with a delay line of {delay.delay / h:.4g} substeps" if ring else ""),
-        _OWNER,
-        "Record fewer instants (record_every), shorten the duration, lengthen dt"
+        (per_row * float(n_out) + ring + blocks) * at_once,
+        f"{what} {n_steps + 1:.4g} control instants recording {n_out:.4g} rows"
+        + (f" with a delay line of {delay.delay / h:.4g} substeps" if ring else "")
+        + (f", {at_once} at a time" if runs > 1 else ""),
+        owner,
+        remedy
+        or "Record fewer instants (record_every), shorten the duration, lengthen dt"
         + (" or shorten the delay" if ring else ""),
     )
     # about four dynamics calls per RK4 substep; a call grows with n_dof squared
     step = 4.0 * (60e-9 + 12e-9 * n * n) + 150e-9
     check_time(
-        step * float(n_steps) * substeps,
-        f"a run of {float(n_steps) * substeps:.4g} RK4 steps",
-        _OWNER,
-        "Shorten the duration, lengthen dt or use fewer substeps",
+        step * float(n_steps) * substeps * runs / max(1, min(workers, runs)),
+        f"{what} {float(n_steps) * substeps:.4g} RK4 steps"
+        + (f" on {min(workers, runs)} cores" if runs > 1 else ""),
+        owner,
+        remedy or "Shorten the duration, lengthen dt or use fewer substeps",
     )
 
 

@@ -11,16 +11,17 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable
+from typing import Protocol
 
 import numpy as np
 from numba.core.ccallback import CFunc
 from numpy.typing import NDArray
 
-from ..errors import InvalidValueError
+from ..errors import Cancelled, InvalidValueError
 from ..model.plant import Plant
 from .loop import DIVERGED, OK, LoopState, SensorArrays, run
 
-__all__ = ["LoopOutputs", "run_in_chunks", "run_scipy"]
+__all__ = ["LoopOutputs", "StopFlag", "run_in_chunks", "run_scipy"]
 
 F64 = NDArray[np.float64]
 LoopOutputs = dict[str, F64]
@@ -30,8 +31,20 @@ Chunk = Callable[[int, int], tuple[int, int]]
 """``chunk(k0, k1) -> (status, k)``: advance a compiled loop over ``k0 <= k < k1``."""
 
 
+class StopFlag(Protocol):
+    """What stops a run between chunks: a :class:`threading.Event` or alike."""
+
+    def is_set(self) -> bool: ...
+
+
 def run_in_chunks(
-    chunk: Chunk, n_rows: int, work: float, progress: bool | None, *, block: int | None = None
+    chunk: Chunk,
+    n_rows: int,
+    work: float,
+    progress: bool | None,
+    *,
+    block: int | None = None,
+    stop: StopFlag | None = None,
 ) -> tuple[int, int]:
     """Run ``chunk`` over ``0 <= k < n_rows``; return ``(status, last row written)``.
 
@@ -51,6 +64,14 @@ def run_in_chunks(
         Run in chunks of ``block`` rows starting at its multiples (the progress
         bar then moves once a chunk). Default: one chunk, or fifty with a
         progress bar.
+    stop : threading.Event or alike, optional
+        Checked before every chunk: once set, the run ends with
+        :class:`~flexarm.errors.Cancelled`.
+
+    Raises
+    ------
+    Cancelled
+        If ``stop`` was set.
     """
     show = sys.stderr.isatty() and work > 5e6 if progress is None else bool(progress)
     if block is not None:
@@ -63,6 +84,10 @@ def run_in_chunks(
         k0, k1 = int(bounds[c]), int(bounds[c + 1])
         if k1 <= k0:
             continue
+        if stop is not None and stop.is_set():
+            if show:
+                sys.stderr.write("\n")
+            raise Cancelled("the run was stopped before its end (its stop flag was set)")
         status, k = chunk(k0, k1)
         if show:
             _progress_bar((c + 1) / n_chunks)

@@ -389,6 +389,8 @@ class ReferencePipeline:
         r = np.zeros((b1 - b0, self.size))
         rp, rv, ra = r_position(n_links), r_velocity(n_links), r_acceleration(n_links)
         r[:, rp : rp + 2], r[:, rv : rv + 2], r[:, ra : ra + 2] = pos[inner], vel[inner], acc[inner]
+        if n_links != 2:
+            self._check_reach(pos[inner], b0)
         if n_links == 2:
             theta, dtheta, ddtheta = (np.empty((e1 - e0, 2)) for _ in range(3))
             self._joint_path(pos, vel, acc, theta, e0, dtheta, ddtheta)
@@ -406,6 +408,26 @@ class ReferencePipeline:
                 r[:, ra : ra + 2] = _central_differences(v_r, dt, e0, b0, b1, self._n_rows)
         self._cache = (b0, r, desired)
         return r, desired
+
+    def _check_reach(self, pos: F64, k0: int) -> None:
+        """Every point of ``pos`` (rows of instants ``k0 ..``) within the annulus a
+        rigid chain of these links reaches: ``max(0, 2 L_max - sum L) <= r <= sum L``
+        (a circle of radius ``L`` for one link), to 1e-9 of the reach."""
+        total = float(self._lengths.sum())
+        inner = max(0.0, 2.0 * float(self._lengths.max()) - total)
+        r = np.hypot(pos[:, 0], pos[:, 1])
+        tol = 1e-9 * total
+        bad = ~((r >= inner - tol) & (r <= total + tol))
+        if np.any(bad):
+            row = int(np.argmax(bad))
+            span = f"{total} m" if inner == total else f"[{inner}, {total}] m"
+            raise InvalidValueError(
+                f"The 'trajectory' parameter of {self._owner} must stay inside the arm's "
+                f"workspace: every point reachable by the {self._n_links}-link arm, at a "
+                f"distance of {span} from the base. Got {pos[row].tolist()} m "
+                f"({r[row]:.6g} m from the base) at t = {(k0 + row) * self._dt:.6g} s "
+                "instead."
+            )
 
     def _joint_path(
         self,

@@ -65,6 +65,16 @@ the *reference fit* of a least-squares FIR model driven by the **true**
 this plant, whose joint stiffness and friction (nonlinear, inside the
 feedback) are not of Hammerstein form.
 
+(c) The dead band
+-----------------
+Uniform commands over ``±60`` N m do not resolve the drive's ``±2`` N m dead
+band. :func:`design_dead_band_excitation` sizes an experiment that does — a
+share of the commands concentrated on ``±3`` dead-band widths, a duration from
+the standard error the knot values need (a pilot run measures the noise and
+the gain) — and the correlated-input path (``method="correlated"``, knots at
+the commands' quantiles) identifies it; ``JointIdentification.dead_band``
+reports the estimate against the truth.
+
 Modules, in the order they build on each other
 ----------------------------------------------
 * :mod:`~flexarm.studies.joint_identification.parameters` — :class:`DriveNonlinearity`,
@@ -75,7 +85,9 @@ Modules, in the order they build on each other
   :class:`JointIdentification` (summary, save, plot);
 * :mod:`~flexarm.studies.joint_identification.estimation` — the curves, the
   soft-windup secants and the Hammerstein fit;
-* :mod:`~flexarm.studies.joint_identification.study` — :func:`identify_joint`.
+* :mod:`~flexarm.studies.joint_identification.study` — :func:`identify_joint`;
+* :mod:`~flexarm.studies.joint_identification.design` — an excitation sized to
+  resolve the drive's dead band (:func:`design_dead_band_excitation`).
 
 Names are imported on first use.
 """
@@ -86,9 +98,11 @@ from typing import TYPE_CHECKING
 
 from ..._lazy import attach
 
-_SUBMODULES = ("estimation", "experiment", "parameters", "result", "study")
+_SUBMODULES = ("design", "estimation", "experiment", "parameters", "result", "study")
 _NAMES = {
     "CurveEstimate": "result",
+    "DeadBandDesign": "design",
+    "design_dead_band_excitation": "design",
     "DriveNonlinearity": "parameters",
     "JointExcitation": "parameters",
     "JointIdentification": "result",
@@ -103,6 +117,8 @@ _NAMES = {
 __getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
 
 if TYPE_CHECKING:  # what type checkers see; nothing is imported at run time
+    from .design import DeadBandDesign as DeadBandDesign
+    from .design import design_dead_band_excitation as design_dead_band_excitation
     from .experiment import JointMeasurements as JointMeasurements
     from .experiment import JointRecord as JointRecord
     from .experiment import joint_test_arm as joint_test_arm

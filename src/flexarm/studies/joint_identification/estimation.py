@@ -7,7 +7,8 @@
 * :func:`windup_secants` — the secant stiffness inside and outside the
   soft-windup region, estimate and truth;
 * :func:`fit_hammerstein` — the Hammerstein model from command to link
-  acceleration, scored on held-out data beside a FIR model on the true drive map.
+  acceleration, scored on held-out data beside a FIR model on the true drive map;
+* :func:`dead_band_summary` — how well its static part resolves the drive's dead band.
 
 The curves are estimated by the paper's semi-recursive kernel regression
 (eq. 14, Epanechnikov kernel, ``h_1`` a fraction of the regressor's standard
@@ -17,6 +18,7 @@ deviation, decay 0.2) on a grid spanning a central quantile range of the data.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -26,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from ...ident.bandwidth import Silverman
 from ...ident.hammerstein import HammersteinIdentifier, fit_percent
 from ...ident.regression import SemiRecursiveKernelRegression
+from ...ident.whiteness import IdentificationWarning
 from ...model.joints import LinearJoint, NonlinearJoint
 from .experiment import JointMeasurements, JointRecord
 from .parameters import DriveNonlinearity
@@ -33,6 +36,7 @@ from .result import CurveEstimate
 
 __all__ = [
     "HammersteinFit",
+    "dead_band_summary",
     "estimate_friction",
     "estimate_stiffness",
     "fit_hammerstein",
@@ -162,6 +166,8 @@ class HammersteinFit:
         the true ``phi(u)``, on the held-out holds, %.
     n_fit : int
         Holds used for fitting.
+    dead_band : dict of str to float
+        :func:`dead_band_summary` of the static part.
     """
 
     model: HammersteinIdentifier
@@ -170,6 +176,7 @@ class HammersteinFit:
     fit_percent: float
     reference_fit_percent: float
     n_fit: int
+    dead_band: dict[str, float]
 
 
 def fit_hammerstein(
@@ -180,11 +187,16 @@ def fit_hammerstein(
     *,
     n_lags: int,
     validation_fraction: float,
+    method: str = "auto",
+    n_knots: int | str = "auto",
+    span: float = 6.0,
 ) -> HammersteinFit:
     """Fit the model from the command ``u_n`` to the accelerometer ``y_n``, one sample per hold.
 
     The two-point normalisation comes from the drive's data sheet: ``phi(0) = 0``
-    and the rated torque at 80 % of ``amplitude`` (N m).
+    and the rated torque at 80 % of ``amplitude`` (N m). ``method`` is the
+    identifier's path and ``n_knots`` its knots (correlated path); ``span`` (N m)
+    the half-range of :func:`dead_band_summary`.
     """
     starts = record.hold_starts
     n_holds = starts.shape[0]
@@ -192,9 +204,14 @@ def fit_hammerstein(
     y = meas.acceleration
     n_fit = round((1.0 - validation_fraction) * n_holds)
     u_known = 0.8 * amplitude
-    model = HammersteinIdentifier(
-        n_lags=n_lags, known_points=((0.0, 0.0), (u_known, float(drive(u_known))))
-    ).fit(u[:n_fit], y[:n_fit])
+    with warnings.catch_warnings():  # the report keeps the warnings (model.report_)
+        warnings.simplefilter("ignore", IdentificationWarning)
+        model = HammersteinIdentifier(
+            n_lags=n_lags,
+            known_points=((0.0, 0.0), (u_known, float(drive(u_known)))),
+            method=method,
+            n_knots=n_knots,
+        ).fit(u[:n_fit], y[:n_fit])
     y_hat = model.predict(u)[n_fit:]
     grid = np.linspace(-amplitude, amplitude, 241)
     validation = {
@@ -210,7 +227,48 @@ def fit_hammerstein(
         fit_percent=fit_percent(y[n_fit:], y_hat),
         reference_fit_percent=_fir_reference(drive(u), y, n_fit, n_lags),
         n_fit=n_fit,
+        dead_band=dead_band_summary(model.nonlinearity, drive, span),
     )
+
+
+def _hinge(x: F64, phi: F64) -> tuple[float, float]:
+    """``(d, s)`` minimising ``sum (phi - s max(x - d, 0))**2`` over ``x >= 0``."""
+    best = (math.inf, 0.0, 0.0)
+    for d in x[:-2]:
+        ramp = np.maximum(x - d, 0.0)
+        s = float(ramp @ phi) / float(ramp @ ramp)
+        r = float(np.sum((phi - s * ramp) ** 2))
+        if r < best[0]:
+            best = (r, float(d), s)
+    return best[1], best[2]
+
+
+def dead_band_summary(
+    phi: Callable[[F64], F64], drive: DriveNonlinearity, span: float, points: int = 241
+) -> dict[str, float]:
+    """How an estimated drive map ``phi`` (N m to N m) resolves the dead band, against the truth.
+
+    On ``[-span, span]`` (N m): the RMS and largest error of ``phi``; and, on each
+    side, the dead band read off the estimate by the hinge ``s max(|x| - d, 0)``
+    fitted by least squares (``d`` on the grid): ``d`` beside the true half-width.
+    The hinge summarises the nonparametric estimate; it is not assumed by the
+    identification.
+    """
+    x = np.linspace(-span, span, points)
+    est, truth = phi(x), drive(x)
+    right = x >= 0.0
+    d_pos, s_pos = _hinge(x[right], est[right])
+    d_neg, s_neg = _hinge(-x[~right][::-1], -est[~right][::-1])
+    return {
+        "span_Nm": float(span),
+        "true_half_width_Nm": float(drive.dead_band),
+        "half_width_positive_Nm": d_pos,
+        "half_width_negative_Nm": d_neg,
+        "slope_positive": s_pos,
+        "slope_negative": s_neg,
+        "rms_error_Nm": float(np.sqrt(np.mean((est - truth) ** 2))),
+        "max_error_Nm": float(np.max(np.abs(est - truth))),
+    }
 
 
 # --------------------------------------------------------------------------- helpers

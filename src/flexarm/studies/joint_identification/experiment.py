@@ -138,7 +138,7 @@ def run_excitation(
 ) -> JointRecord:
     """Drive ``arm`` open loop with the random command through the drive's map.
 
-    The commands ``u ~ U(-amplitude, amplitude)`` are drawn from ``rng``, one
+    The commands (:meth:`JointExcitation.commands`) are drawn from ``rng``, one
     per hold (``n_holds + 1`` of them), and ``tau = drive(u)`` is held for
     ``hold_steps`` samples: :func:`flexarm.simulate_open_loop` with the samples
     held over each period ``dt`` (zero-order hold), one RK4 step per period.
@@ -152,7 +152,7 @@ def run_excitation(
     """
     dt, steps, n_steps = excitation.dt, excitation.hold_steps, excitation.n_steps
     n_holds = n_steps // steps
-    command = rng.uniform(-excitation.amplitude, excitation.amplitude, n_holds + 1)
+    command = excitation.commands(n_holds + 1, rng)
     applied = excitation.drive(command)
     per_sample = np.repeat(applied, steps)[: n_steps + 1]  # (n_holds + 1) steps > n_steps
     t = dt * np.arange(n_steps + 1)

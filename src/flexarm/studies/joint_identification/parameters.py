@@ -59,6 +59,11 @@ class DriveNonlinearity:
 class JointExcitation:
     """The random-torque experiment.
 
+    The commands are i.i.d.: each is drawn, with probability
+    ``dead_band_fraction``, from ``U(-dead_band_span, dead_band_span)`` (to
+    resolve the drive's dead band, :mod:`~flexarm.studies.joint_identification.design`),
+    and otherwise from ``U(-amplitude, amplitude)``.
+
     Parameters
     ----------
     duration : float
@@ -69,9 +74,14 @@ class JointExcitation:
         Hold time of each random command, s; also the Hammerstein sample
         period. Rounded to a whole number of ``dt``.
     amplitude : float
-        Commands are ``U(-amplitude, amplitude)``, N m.
+        Half-range of the wide commands, N m.
     drive : DriveNonlinearity
         The drive's static map (the Hammerstein part's true ``phi``).
+    dead_band_fraction : float
+        Share of the commands drawn near the dead band, in [0, 1) (0: all wide,
+        the default experiment).
+    dead_band_span : float
+        Half-range of those commands, N m (> 0; at most ``amplitude``).
     """
 
     duration: float = 60.0
@@ -79,11 +89,26 @@ class JointExcitation:
     hold: float = 0.01
     amplitude: float = 60.0
     drive: DriveNonlinearity = field(default_factory=DriveNonlinearity)
+    dead_band_fraction: float = 0.0
+    dead_band_span: float = 6.0
 
     def __post_init__(self) -> None:
         validate_real_fields(
-            self, "JointExcitation", positive=("duration", "dt", "hold", "amplitude")
+            self,
+            "JointExcitation",
+            positive=("duration", "dt", "hold", "amplitude", "dead_band_span"),
+            nonnegative=("dead_band_fraction",),
         )
+        if not self.dead_band_fraction < 1.0:
+            raise InvalidValueError(
+                "The 'dead_band_fraction' parameter of JointExcitation must be < 1. "
+                f"Got {self.dead_band_fraction} instead."
+            )
+        if self.dead_band_span > self.amplitude:
+            raise InvalidValueError(
+                "The 'dead_band_span' parameter of JointExcitation must be <= amplitude = "
+                f"{self.amplitude}. Got {self.dead_band_span} instead."
+            )
         if not isinstance(self.drive, DriveNonlinearity):
             raise InvalidTypeError(
                 "The 'drive' parameter of JointExcitation must be a DriveNonlinearity. "
@@ -109,6 +134,19 @@ class JointExcitation:
     def n_holds(self) -> int:
         """Whole holds in the record."""
         return self.n_steps // self.hold_steps
+
+    def commands(self, n: int, rng: np.random.Generator) -> F64:
+        """``n`` commands (N m) drawn from ``rng`` (class docstring).
+
+        With ``dead_band_fraction = 0`` exactly the draws of the uniform
+        experiment, ``rng.uniform(-amplitude, amplitude, n)``.
+        """
+        wide = rng.uniform(-self.amplitude, self.amplitude, n)
+        if self.dead_band_fraction == 0.0:
+            return wide
+        near = rng.uniform(-self.dead_band_span, self.dead_band_span, n)
+        out: F64 = np.where(rng.uniform(size=n) < self.dead_band_fraction, near, wide)
+        return out
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._io import JSONValue, atomic_path
+from .parameters import DriveNonlinearity
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -110,6 +111,9 @@ class JointIdentification:
         Fit of a least-squares FIR model driven by the true ``phi(u)``, %.
     info : dict
         Settings (JSON-able).
+    dead_band : dict
+        How the Hammerstein model's static part resolves the drive's dead band
+        (:func:`~flexarm.studies.joint_identification.estimation.dead_band_summary`).
     """
 
     stiffness: CurveEstimate
@@ -121,6 +125,7 @@ class JointIdentification:
     fit_percent: float
     reference_fit_percent: float
     info: dict[str, JSONValue]
+    dead_band: dict[str, float] = field(default_factory=dict)
 
     def summary(self) -> dict[str, JSONValue]:
         """Error figures and settings as a JSON-able dict."""
@@ -129,9 +134,11 @@ class JointIdentification:
             "friction": self.friction.summary(),
             "drive": self.drive.summary(),
             "windup": dict(self.windup),
+            "dead_band": dict(self.dead_band),
             "hammerstein": {
                 "fit_percent": self.fit_percent,
                 "reference_fit_percent": self.reference_fit_percent,
+                "method": self.hammerstein.method_,
                 "arma_order": self.hammerstein.order_,
                 "a": list(self.hammerstein.arma_.a),
                 "b": list(self.hammerstein.arma_.b),
@@ -221,7 +228,17 @@ class JointIdentification:
         ax.plot(d.x, d.truth, "k--", lw=1, label="true drive map")
         ax.plot(d.x, d.estimate, lw=1.2, label="Hammerstein φ̂")
         ax.set(xlabel="command u (N m)", ylabel="applied torque (N m)", title="drive nonlinearity")
-        ax.legend(loc="best", fontsize="small")
+        ax.legend(loc="upper left", fontsize="small")
+        span = self.dead_band.get("span_Nm")
+        drive = self.info.get("drive")
+        if span and isinstance(drive, dict):  # the dead band, enlarged
+            truth = DriveNonlinearity(float(drive["dead_band_Nm"]), float(drive["limit_Nm"]))  # type: ignore[arg-type]
+            xs = np.linspace(-span, span, 241)
+            inset = ax.inset_axes((0.58, 0.08, 0.38, 0.38))
+            inset.plot(xs, truth(xs), "k--", lw=1)
+            inset.plot(xs, self.hammerstein.nonlinearity(xs), lw=1.2)
+            inset.set_title("dead band", fontsize="small")
+            inset.tick_params(labelsize="x-small")
         v = self.validation
         ax = axes[1, 1]
         m = min(200, v["t"].shape[0])

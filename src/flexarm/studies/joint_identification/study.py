@@ -7,6 +7,7 @@ import numpy as np
 from ..._io import JSONValue
 from ..._validation import check_int, check_option, check_real, check_rng
 from ...errors import InvalidTypeError, InvalidValueError
+from ...ident.options import METHODS
 from ...model.arm import FlexibleArm
 from .estimation import estimate_friction, estimate_stiffness, fit_hammerstein, windup_secants
 from .experiment import joint_test_arm, measure, run_excitation
@@ -32,6 +33,8 @@ def identify_joint(
     friction_bandwidth: float = 0.056,
     n_lags: int = 40,
     validation_fraction: float = 1.0 / 3.0,
+    method: str = "auto",
+    n_knots: int | str = "auto",
     rng: np.random.Generator | int | None = 0,
 ) -> JointIdentification:
     """Excite the joint with a random torque and identify its nonlinearities.
@@ -67,6 +70,15 @@ def identify_joint(
     validation_fraction : float
         Trailing part of the record held out to score the Hammerstein model
         (0 < fraction < 1).
+    method : {"auto", "white", "correlated"}
+        Path of the Hammerstein identifier (:class:`~flexarm.ident.HammersteinIdentifier`);
+        the commands are i.i.d., so "auto" takes the white path. "correlated"
+        puts the knots of the static part at the commands' quantiles, which
+        follows a concentrated command distribution
+        (:mod:`~flexarm.studies.joint_identification.design`).
+    n_knots : int or "auto"
+        Knots of the static part on the correlated path (``>= 2``), or chosen on
+        held-out data; a :class:`DeadBandDesign` gives the number its resolution needs.
     rng : numpy.random.Generator or int, optional
         Source of the commands and the sensor noise (default seed 0).
 
@@ -98,6 +110,7 @@ def identify_joint(
                 f"Got {type(value).__name__} instead."
             )
     check_option(torque_measurement, "torque_measurement", _OWNER, TORQUE_MEASUREMENTS)
+    check_option(method, "method", _OWNER, METHODS)
     quasi_static_fraction = check_real(
         quasi_static_fraction, "quasi_static_fraction", _OWNER, positive=True
     )
@@ -156,6 +169,9 @@ def identify_joint(
         excitation.amplitude,
         n_lags=n_lags,
         validation_fraction=validation_fraction,
+        method=method,
+        n_knots=n_knots,
+        span=excitation.dead_band_span,
     )
     dt = excitation.dt
     info: dict[str, JSONValue] = {
@@ -163,6 +179,9 @@ def identify_joint(
         "dt_s": dt,
         "hold_s": excitation.hold_steps * dt,
         "amplitude_Nm": excitation.amplitude,
+        "dead_band_fraction": excitation.dead_band_fraction,
+        "dead_band_span_Nm": excitation.dead_band_span,
+        "hammerstein_method": ham.model.method_,
         "drive": {"dead_band_Nm": drive.dead_band, "limit_Nm": drive.limit},
         "torque_measurement": torque_measurement,
         "friction_window": friction_window,
@@ -193,4 +212,5 @@ def identify_joint(
         ham.fit_percent,
         ham.reference_fit_percent,
         info,
+        ham.dead_band,
     )

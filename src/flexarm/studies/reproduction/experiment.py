@@ -28,7 +28,7 @@ import numpy as np
 
 from ...control.linearize import closed_loop_poles
 from ...sim.batch import Outcome, iter_simulations
-from ...sim.closed_loop import simulate
+from ...sim.closed_loop import check_budget, simulate
 from ...sim.results import SimulationError
 from ...sim.scenario import Scenario
 from .cases import (
@@ -120,10 +120,25 @@ class RunMatrix:
             unique.setdefault(c.key(), c)
         return unique
 
-    def validate(self, duration: float | None, dt: float) -> None:
-        """Build every run's scenario, so that bad settings fail before the first run."""
-        for c in self.unique().values():
-            Scenario.from_dict(c.scenario_dict(duration, dt), source=_SOURCE)
+    def validate(self, duration: float | None, dt: float, workers: int = 1) -> None:
+        """Build every run's scenario and check what the runs need (memory, time), so
+        that bad settings fail before the first run."""
+        unique = self.unique().values()
+        for c in unique:
+            sc = Scenario.from_dict(c.scenario_dict(duration, dt), source=_SOURCE)
+            check_budget(
+                sc.arm,
+                sc.sensor,
+                sc.delay,
+                dt=sc.simulation.dt,
+                duration=float(sc.simulation.duration or sc.trajectory.duration),
+                substeps=sc.simulation.substeps,
+                record_every=sc.simulation.record_every,
+                runs=len(unique),
+                workers=workers,
+                owner="reproduce",
+                remedy="Shorten the duration or lengthen dt",
+            )
 
     def run(
         self,

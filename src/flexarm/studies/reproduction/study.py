@@ -103,7 +103,7 @@ def reproduce(
         )
     else:
         runs = RunMatrix.build(ks=ks, law=law)
-    runs.validate(duration, dt)  # bad settings fail before the first run
+    runs.validate(duration, dt, workers)  # bad settings fail before the first run
 
     start = time.perf_counter()
     cases, delay_study, ks_study = runs.run(
