@@ -453,3 +453,24 @@ def test_auto_series_agrees_with_direct_summation_to_1e12(case, gridded):
 def test_series_bad_values(value, exc, match):
     with pytest.raises(exc, match=match):
         NadarayaWatson(series=value).fit(*data(10))
+
+
+# ------------------------------------------------------------------ threads: the same numbers
+
+
+def test_split_over_threads_changes_no_bit(monkeypatch):
+    from flexarm.ident.accumulators import _threads
+
+    X, y = data(3000, d=2, seed=12)
+    grid2 = np.random.default_rng(13).uniform(0, 1, (40, 2))
+    cases = [
+        (SemiRecursiveKernelRegression, {"bandwidth": 0.3}, X[:, 0], GRID),
+        (SemiRecursiveKernelRegression, {"kernel": "uniform", "bandwidth": [0.3, 0.4]}, X, grid2),
+    ]
+    for cls, kw, XX, q in cases:
+        for g in (None, q):
+            monkeypatch.setattr(_threads, "MIN_WORK", 2**62)
+            serial = cls(**kw, grid=g).fit(XX, y).predict(q)
+            monkeypatch.setattr(_threads, "MIN_WORK", 1)
+            assert _threads.workers(10**6, 40) == min(_threads._cores(), 40)
+            np.testing.assert_array_equal(cls(**kw, grid=g).fit(XX, y).predict(q), serial)

@@ -36,7 +36,7 @@ F64 = NDArray[np.float64]
 GAUSS_ZERO = 38.61
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def sample_bandwidths(
     bw: F64, decay: float, start: int, n: int, recursive: bool
 ) -> tuple[F64, F64]:  # pragma: no cover - compiled
@@ -55,7 +55,7 @@ def sample_bandwidths(
     return h, scale
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def grid_update_1d(
     code: int, gs: F64, x: F64, y: F64, h: F64, scale: F64, num: F64, den: F64, radius: float
 ) -> None:  # pragma: no cover - compiled
@@ -102,7 +102,7 @@ def grid_update_1d(
                 den[k] += w
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def grid_update(
     code: int, grid: F64, X: F64, y: F64, h: F64, scale: F64, num: F64, den: F64
 ) -> None:  # pragma: no cover - compiled
@@ -118,7 +118,7 @@ def grid_update(
                 den[j] += w
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def exact_predict(
     code: int, Q: F64, X: F64, y: F64, h: F64, scale: F64, block: int
 ) -> F64:  # pragma: no cover - compiled
@@ -154,7 +154,7 @@ def exact_predict(
     return out
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def exact_predict_1d(
     code: int, q: F64, x: F64, y: F64, h: F64, scale: F64, block: int
 ) -> F64:  # pragma: no cover - compiled
@@ -186,7 +186,7 @@ def exact_predict_1d(
     return out
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def band_update_1d(
     gs: F64, x: F64, y: F64, h: F64, scale: F64, num: F64, den: F64, inner: float
 ) -> None:  # pragma: no cover - compiled
@@ -220,7 +220,7 @@ def band_update_1d(
             den[k] += w
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def accumulate_rows(W: F64, y: F64, num: F64, den: F64) -> None:  # pragma: no cover
     """``num += sum_i W[i] y[i]``, ``den += sum_i W[i]`` row by row (callable kernels)."""
     for i in range(W.shape[0]):
@@ -231,7 +231,7 @@ def accumulate_rows(W: F64, y: F64, num: F64, den: F64) -> None:  # pragma: no c
                 den[j] += w
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def add_totals(scale: F64, y: F64, totals: F64) -> None:  # pragma: no cover - compiled
     """``totals += (sum scale_i, sum scale_i |y_i|)``, one sample at a time, in order."""
     for i in range(y.shape[0]):
@@ -239,7 +239,7 @@ def add_totals(scale: F64, y: F64, totals: F64) -> None:  # pragma: no cover - c
         totals[1] += scale[i] * abs(y[i])
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def ratio(num: F64, den: F64) -> F64:  # pragma: no cover - compiled
     """``num / den`` elementwise, NaN where ``den == 0``."""
     out = np.empty(num.shape[0])

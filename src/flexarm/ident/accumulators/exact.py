@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 
 from ..kernels import SERIES_TERMS, SERIES_WIDTH, gauss_series_eval, gauss_series_moments
 from . import _loops
+from ._threads import run_split, workers
 from .base import CALLABLE, Accumulator, Smoothing, State
 from .series import far_points
 
@@ -99,13 +100,18 @@ class ExactSamples(Accumulator):
         setup = self.setup
         X, y, h, s = self.X, self.y, self.h, self.scale
         b = setup.block
-        if setup.code != CALLABLE:
-            if setup.d == 1:
-                q0 = np.ascontiguousarray(Q[:, 0])
-                r1: F64 = _loops.exact_predict_1d(setup.code, q0, X[:, 0], y, h[:, 0], s, b)
-                return r1
-            res: F64 = _loops.exact_predict(setup.code, Q, X, y, h, s, b)
-            return res
+        if setup.code != CALLABLE:  # the query points are independent: split them over the cores
+            out = np.empty(Q.shape[0])
+            q0, x0, h0 = np.ascontiguousarray(Q[:, 0]), X[:, 0], h[:, 0]
+
+            def part(i: int, j: int) -> None:
+                if setup.d == 1:
+                    out[i:j] = _loops.exact_predict_1d(setup.code, q0[i:j], x0, y, h0, s, b)
+                else:
+                    out[i:j] = _loops.exact_predict(setup.code, Q[i:j], X, y, h, s, b)
+
+            run_split(Q.shape[0], workers(Q.shape[0] * X.shape[0], Q.shape[0]), part)
+            return out
         num, den = setup.blocked_callable_sums(Q, X, y, h, s)
         r: F64 = _loops.ratio(num, den)
         return r

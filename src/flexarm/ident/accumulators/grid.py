@@ -6,6 +6,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import _loops
+from ._threads import run_split, workers
 from .base import CALLABLE, BlockedAccumulator
 
 __all__ = ["GridSums"]
@@ -41,12 +42,25 @@ class GridSums(BlockedAccumulator):
         h, scale = setup.sample_bandwidths(start, X.shape[0])
         if setup.code == CALLABLE:
             setup.callable_sums(self.sorted_grid, X, y, h, scale, num, den)
-        elif setup.d == 1:
+            return
+        grid, g, m = self.sorted_grid, self.sorted_grid.shape[0], X.shape[0]
+        if setup.d == 1:  # the grid points are independent: split them over the cores
             radius = _loops.GAUSS_ZERO if setup.code == 0 else 1.0
-            gs = self.sorted_grid[:, 0]
-            _loops.grid_update_1d(setup.code, gs, X[:, 0], y, h[:, 0], scale, num, den, radius)
+            gs, x, h1 = grid[:, 0], X[:, 0], h[:, 0]
+            span = float(gs[-1] - gs[0])
+            reach = 1.0 if span == 0.0 else min(1.0, 2.0 * radius * float(h1.max()) / span)
+
+            def part(a: int, b: int) -> None:
+                code = setup.code
+                _loops.grid_update_1d(code, gs[a:b], x, y, h1, scale, num[a:b], den[a:b], radius)
+
+            run_split(g, workers(m * g * reach, g), part)
         else:
-            _loops.grid_update(setup.code, self.sorted_grid, X, y, h, scale, num, den)
+
+            def part(a: int, b: int) -> None:
+                _loops.grid_update(setup.code, grid[a:b], X, y, h, scale, num[a:b], den[a:b])
+
+            run_split(g, workers(m * g, g), part)
 
     def sums(self) -> tuple[F64, F64]:
         now = self.current()
