@@ -17,19 +17,21 @@ Default path (``--n-default`` = 10**6 samples onto 512 points)
     the largest difference between the two, relative to ``max |m|``, is printed.
 
 At scale (``--n`` = 10**8 samples, chunks of ``--chunk`` = 2**20)
-    Chunk ``k`` is generated from ``default_rng([SEED, k])`` (same formula), so every
-    path sees the same samples without holding them. Estimates, on a 512-point grid:
+    Chunk ``k`` is generated from ``default_rng([SEED, k])`` (same formula), so every path
+    sees the same samples without holding them. Estimates, on a 512-point grid:
     ``NadarayaWatson("gaussian", 0.05)`` (series mode, by default) and
-    ``SemiRecursiveKernelRegression("epanechnikov", 0.05, decay=0.2)`` (grid mode,
-    direct sums). Paths: ``fit_chunks`` of a generator; ``fit`` of a Dask array built
-    from the same chunks (``da.from_delayed``), threaded scheduler; with ``--cluster``,
-    the same on a ``LocalCluster`` (2 worker processes, 1 thread each). Each
-    (estimate, path) runs in a fresh process: wall time of the fit (generation
-    included: it is part of streaming 10**8 samples; the generation alone is timed
-    too), the process's peak RSS (``ru_maxrss``), its RSS after the imports, and the
-    peak of ``tracemalloc`` (allocations made through Python and NumPy; Numba's own
-    are not traced). The estimates of every path must equal the generator's bit for
-    bit (checked: the grid sums are compared).
+    ``SemiRecursiveKernelRegression("epanechnikov", 0.05, decay=0.2)`` (grid mode, direct
+    sums). Paths: ``fit_chunks`` of a generator; ``fit`` of a Dask array built from the same
+    chunks (``da.from_delayed``), threaded scheduler; with ``--cluster``, the same on a
+    ``LocalCluster`` (2 worker processes, 1 thread each). Each (estimate, path) runs in a
+    fresh process: wall time of the fit (generation included: it is part of streaming 10**8
+    samples; the generation alone is timed too), the process's CPU time (this process's
+    threads; a cluster's workers are other processes), its peak RSS during the fit
+    (``VmHWM``, reset by ``/proc/self/clear_refs`` after the imports and the warm-up) beside
+    its RSS before the fit (imports, compiled code), and the peak of ``tracemalloc``
+    (allocations made through Python and NumPy; Numba's own are not traced). The estimates
+    of every path must equal the generator's bit for bit (checked: the grid sums are
+    compared).
 
 The machine has 2 cores shared with other work: the load average is printed.
 """
@@ -76,8 +78,25 @@ def make_estimator(name: str) -> Any:
     return SemiRecursiveKernelRegression("epanechnikov", H, 0.2, grid=GRID)
 
 
-def _rss_mb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # kB on Linux
+def _status_mb(field: str) -> float:
+    """``VmRSS`` (now) or ``VmHWM`` (peak since the last reset) of this process, MB."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith(field + ":"):
+                    return float(line.split()[1]) / 1024.0
+    except OSError:  # pragma: no cover - not Linux
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def _reset_peak() -> None:
+    """Reset the peak RSS (``VmHWM``) to the current RSS (Linux: ``clear_refs`` 5)."""
+    try:
+        with open("/proc/self/clear_refs", "w") as f:
+            f.write("5")
+    except OSError:  # pragma: no cover - not Linux, or not allowed
+        pass
 
 
 def run_case(estimate: str, path: str, n: int, chunk: int) -> dict[str, Any]:
@@ -102,9 +121,10 @@ def run_case(estimate: str, path: str, n: int, chunk: int) -> dict[str, Any]:
             client.run(lambda: make_estimator(estimate).fit_chunks([chunk_data(0, 1000)]) and None)
         else:
             dask.config.set(scheduler="threads")
-    base_rss = _rss_mb()
+    base_rss = _status_mb("VmRSS")
+    _reset_peak()
     tracemalloc.start()
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     est = make_estimator(estimate)
     if path == "generator":
         est.fit_chunks(chunk_data(k, s) for k, s in enumerate(sizes))
@@ -118,7 +138,8 @@ def run_case(estimate: str, path: str, n: int, chunk: int) -> dict[str, Any]:
         )
         est.fit(X, y)
     m = est.predict(GRID)
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    peak_rss = _status_mb("VmHWM")
     _, traced = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     if client is not None:
@@ -133,9 +154,10 @@ def run_case(estimate: str, path: str, n: int, chunk: int) -> dict[str, Any]:
         "path": path,
         "n": est.n_samples_,
         "wall_s": wall,
+        "cpu_s": cpu,
         "generation_only_s": gen,
-        "peak_rss_mb": _rss_mb(),
-        "rss_after_imports_mb": base_rss,
+        "peak_rss_mb": peak_rss,
+        "rss_before_fit_mb": base_rss,
         "tracemalloc_peak_mb": traced / 2**20,
         "max_err_vs_sin": float(np.nanmax(np.abs(m - np.sin(2 * np.pi * GRID)))),
         "numerator": est.numerator_.tolist(),
@@ -249,14 +271,14 @@ def main(argv: list[str] | None = None) -> int:
     if scale:
         print(f"\nAt scale: {args.n} samples in chunks of {args.chunk} onto {N_GRID} points:")
         print(
-            f"{'estimate / path':<44} {'best':>8} {'median':>8} {'gen.':>7} {'peak RSS':>9} "
-            f"{'imports':>8} {'traced':>8}  bitwise"
+            f"{'estimate / path':<44} {'best':>8} {'median':>8} {'cpu':>7} {'gen.':>7} "
+            f"{'peak RSS':>9} {'before':>8} {'traced':>8}  bitwise"
         )
         for k, v in scale.items():
             print(
-                f"{k:<44} {v['best_s']:>7.1f}s {v['median_s']:>7.1f}s "
+                f"{k:<44} {v['best_s']:>7.1f}s {v['median_s']:>7.1f}s {v['cpu_s']:>6.1f}s "
                 f"{v['generation_only_s']:>6.1f}s {v['peak_rss_mb']:>6.0f} MB "
-                f"{v['rss_after_imports_mb']:>5.0f} MB {v['tracemalloc_peak_mb']:>5.1f} MB  "
+                f"{v['rss_before_fit_mb']:>5.0f} MB {v['tracemalloc_peak_mb']:>5.1f} MB  "
                 f"{v['equal_to_generator_bitwise']}"
             )
     return 0

@@ -336,6 +336,15 @@ def test_dask_bad_input(dask_array):
     assert not hasattr(est, "n_samples_")  # a failed fit leaves no state
 
 
+def test_dask_exact_mode_checks_memory_first(dask_array, monkeypatch):
+    monkeypatch.setenv("FLEXARM_MAX_MEMORY", "64k")
+    X, y = data(5000, seed=14)
+    est = SemiRecursiveKernelRegression(bandwidth=0.2)
+    with pytest.raises(ValueError, match=r"exact mode.*memory.*Give a grid"):
+        est.fit(dask_array.from_array(X[:, 0], chunks=1000), y)
+    SemiRecursiveKernelRegression(bandwidth=0.2, grid=X_Q).fit(dask_array.from_array(X), y)
+
+
 # ---------------------------------------------------------------- iterators: bad input
 
 

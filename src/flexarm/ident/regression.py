@@ -228,7 +228,8 @@ class _KernelRegression(HyperParameters):
         evaluated on its samples); changing them before a later call raises
         ``ValueError`` (call :meth:`fit` to start again).
 
-        ``X`` and ``y`` may be Dask arrays (as in :meth:`fit`).
+        ``X`` and ``y`` may be Dask arrays (as in :meth:`fit`); if a chunk turns
+        out bad (e.g. NaN), the chunks combined before it stay added.
 
         Parameters
         ----------

@@ -198,9 +198,13 @@ def band_update_1d(
     no sample within ``inner h``, these sums are therefore the direct sums bit
     for bit (series mode's fallback far from the data).
     """
+    g0 = gs[0]
+    g1 = gs[gs.shape[0] - 1]
     for i in range(x.shape[0]):
         xi = x[i]
         hi = h[i]
+        if xi - inner * hi < g0 and g1 < xi + inner * hi:
+            continue  # the whole grid is nearer than inner h: no band point
         si = scale[i]
         yi = y[i]
         r = GAUSS_ZERO * hi * (1.0 + 1e-9) + 1e-12 * abs(xi)
