@@ -210,8 +210,8 @@ def smoothing(
                 owner,
                 "bandwidth",
                 f"a number to fit from {source} (a rule such as 'silverman' needs every "
-                "sample at once; evaluate it with silverman_bandwidth on the data, or a part "
-                "of it, and pass the value)",
+                "sample at once; compute it with silverman_bandwidth(X_part, decay, n=n_total) "
+                "and pass the value)",
                 repr(value),
             )
         bw = _bandwidth(value, np.zeros((1, dim)), decay, owner)

@@ -6,15 +6,22 @@ samples. Each mode keeps a different state behind one interface
 (:class:`~flexarm.ident.accumulators.base.Accumulator`: ``add_chunk``,
 ``evaluate``, ``state``, ``from_state``):
 
-========== =========================== ==================================== ===========
+========== =========================== ==================================== ==================
 mode       class                       state                                exactness
-========== =========================== ==================================== ===========
+========== =========================== ==================================== ==================
 exact      :class:`ExactSamples`       the samples ``(X_i, Y_i, h_i)``      exact at any point
-grid       :class:`GridSums`           ``N = sum Y_i w_i``, ``D = sum w_i``  exact on the grid
-                                       at the grid points
+grid       :class:`GridSums`           ``N = sum Y_i w_i``, ``D = sum w_i`` exact on the grid
+                                       at the grid points (blocked)
 binned     :class:`BinnedSums`         binned blocks + closed-block sums    proven bound
-series     :class:`SeriesMoments`      Gaussian cluster moments             to rounding
-========== =========================== ==================================== ===========
+series     :class:`SeriesMoments`      Gaussian cluster moments, band sums  to rounding; direct
+                                       (blocked)                            far from the data
+========== =========================== ==================================== ==================
+
+The interface also has :meth:`Accumulator.chunk_partials` (a chunk's partial
+sums, computed anywhere) and :meth:`Accumulator.add_partials` (combined in
+order). Compiled work over independent outputs (exact mode's query points,
+grid mode's grid points) is split over the cores from the main thread
+(:mod:`~flexarm.ident.accumulators._threads`; the same numbers bit for bit).
 
 :func:`choose` picks the class from the estimate's :class:`Smoothing` (the
 estimators call it; a user never needs to).

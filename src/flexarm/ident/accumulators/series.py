@@ -143,9 +143,12 @@ class SeriesMoments(BlockedAccumulator):
         h = float(setup.bandwidth[0])
         s = setup.series_scale()
         gauss_series_moments(x, y, s, self.origin, h, sums["series_mn"], sums["series_md"])
+        gs = self.sorted_grid[:, 0]
+        reach = SERIES_BAND * h  # one bandwidth (decay = 0): skip the band if no sample has one
+        if float(x.max()) - reach < gs[0] and gs[-1] < float(x.min()) + reach:
+            return
         hs, scale = setup.sample_bandwidths(start, x.shape[0])
         band = sums["series_band"]
-        gs = self.sorted_grid[:, 0]
         _loops.band_update_1d(gs, x, y, hs[:, 0], scale, band[0], band[1], SERIES_BAND)
 
     def _scaled(self) -> tuple[F64, F64, F64, dict[str, F64]]:
