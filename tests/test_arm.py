@@ -34,10 +34,16 @@ def random_state(arm: fa.FlexibleArm, rng: np.random.Generator, scale: float = 0
     return q, dq
 
 
+# The model before geometric stiffening and clamped-mass defaults: tests written for
+# it state it (the defaults of a user-built arm changed to stiffening, clamped-mass).
+LINEAR_CLAMPED_FREE = {"boundary": "clamped-free", "geometric_stiffening": False}
+
 ARMS = {
     "paper": lambda: fa.FlexibleArm.paper(),
     "paper-2modes": lambda: fa.FlexibleArm.paper(n_modes=2),
-    "one-link": lambda: fa.FlexibleArm([fa.Link(1.2, 3.0, 0.8, n_modes=3, hub_inertia=0.1)]),
+    "one-link": lambda: fa.FlexibleArm(
+        [fa.Link(1.2, 3.0, 0.8, n_modes=3, hub_inertia=0.1)], **LINEAR_CLAMPED_FREE
+    ),
     "three-links-mixed": lambda: fa.FlexibleArm(
         [
             fa.Link(1.0, 5.0, 1.1, n_modes=2, hub_inertia=0.2),
@@ -46,18 +52,42 @@ ARMS = {
         ],
         payload_mass=0.3,
         payload_inertia=0.02,
+        **LINEAR_CLAMPED_FREE,
     ),
     "clamped-mass": lambda: fa.FlexibleArm(
         [fa.Link(1.3, 4.0, 0.9, n_modes=2, hub_mass=0.3), fa.Link(0.9, 2.5, 0.5, n_modes=2)],
         payload_mass=0.4,
         payload_inertia=0.05,
         boundary="clamped-mass",
+        geometric_stiffening=False,
+    ),
+    # geometric stiffening (the default of an arm a user builds): foreshortening in the map
+    "stiffening-three-links": lambda: fa.FlexibleArm(
+        [
+            fa.Link(1.0, 5.0, 1.1, n_modes=2, hub_inertia=0.2),
+            fa.Link(0.8, 2.0, 0.6, n_modes=0, hub_mass=0.5, hub_inertia=0.03),
+            fa.Link(0.6, 1.5, 0.4, n_modes=3, hub_mass=0.2, hub_inertia=0.01),
+        ],
+        payload_mass=0.3,
+        payload_inertia=0.02,
+        boundary="clamped-mass",
+        geometric_stiffening=True,
+    ),
+    "stiffening-defaults": lambda: fa.FlexibleArm(
+        [fa.Link(1.3, 4.0, 0.9, hub_mass=0.3), fa.Link(0.9, 2.5, 0.5)], payload_mass=0.4
     ),
     "amplitude-normalised": lambda: fa.FlexibleArm.paper(
         n_modes=2, mode_normalization="amplitude", mode_amplitude=0.1
     ),
     "damped": lambda: fa.FlexibleArm(
-        [fa.Link(1.0, 5.0, 1.1, n_modes=2, modal_damping=0.05)] * 2, payload_mass=0.2
+        [fa.Link(1.0, 5.0, 1.1, n_modes=2, modal_damping=0.05)] * 2,
+        payload_mass=0.2,
+        **LINEAR_CLAMPED_FREE,
+    ),
+    "damped-stiffening": lambda: fa.FlexibleArm(
+        [fa.Link(1.0, 5.0, 1.1, n_modes=2, modal_damping=0.05)] * 2,
+        payload_mass=0.2,
+        geometric_stiffening=True,
     ),
 }
 
@@ -131,7 +161,12 @@ def test_stiff_links_approach_rigid_arm():
 
     rigid = joint_path(fa.FlexibleArm([fa.Link(1.0, 1.0, 1.0, n_modes=0)] * 2))
     errors = [
-        np.abs(joint_path(fa.FlexibleArm([fa.Link(1.0, ei, 1.0, n_modes=1)] * 2)) - rigid).max()
+        np.abs(
+            joint_path(
+                fa.FlexibleArm([fa.Link(1.0, ei, 1.0, n_modes=1)] * 2, **LINEAR_CLAMPED_FREE)
+            )
+            - rigid
+        ).max()
         for ei in (1e2, 1e3, 1e4)
     ]
     assert errors[0] > errors[1] > errors[2]
@@ -217,7 +252,17 @@ def _integrate(arm, q0, dq0, tau, t_end):
     )
 
 
-@pytest.mark.parametrize("name", ["paper", "paper-2modes", "three-links-mixed", "clamped-mass"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "paper",
+        "paper-2modes",
+        "three-links-mixed",
+        "clamped-mass",
+        "stiffening-three-links",
+        "stiffening-defaults",
+    ],
+)
 def test_energy_conserved_without_torque_or_damping(name):
     arm = ARMS[name]()
     rng = np.random.default_rng(7)
@@ -233,9 +278,10 @@ def test_energy_conserved_without_torque_or_damping(name):
     assert kin.max() - kin.min() > 1e-3 * e0
 
 
-def test_power_balance_with_torque_and_damping():
+@pytest.mark.parametrize("name", ["damped", "damped-stiffening"])
+def test_power_balance_with_torque_and_damping(name):
     """dE/dt = dq' B tau - dq' D dq, with dE/dt from M, dM/dq and the accelerations."""
-    arm = ARMS["damped"]()
+    arm = ARMS[name]()
     rng = np.random.default_rng(8)
     q, dq = random_state(arm, rng)
     tau = rng.normal(size=arm.n_links)
@@ -247,8 +293,9 @@ def test_power_balance_with_torque_and_damping():
     assert de == pytest.approx(power, rel=1e-10, abs=1e-10)
 
 
-def test_damping_dissipates_energy():
-    arm = ARMS["damped"]()
+@pytest.mark.parametrize("name", ["damped", "damped-stiffening"])
+def test_damping_dissipates_energy(name):
+    arm = ARMS[name]()
     rng = np.random.default_rng(9)
     q0, dq0 = random_state(arm, rng, scale=0.05)
     sol = _integrate(arm, q0, dq0, np.zeros(arm.n_links), 2.0)
@@ -259,7 +306,9 @@ def test_damping_dissipates_energy():
 
 
 def test_modal_damping_matrix():
-    arm = fa.FlexibleArm([fa.Link(1.0, 5.0, 1.1, n_modes=2, modal_damping=0.05)])
+    arm = fa.FlexibleArm(
+        [fa.Link(1.0, 5.0, 1.1, n_modes=2, modal_damping=0.05)], **LINEAR_CLAMPED_FREE
+    )
     w = arm.link_frequencies[0]
     # mass-normalised modes: D = 2 zeta omega
     np.testing.assert_allclose(np.diag(arm.damping_matrix)[1:], 2 * 0.05 * w, rtol=1e-12)
@@ -276,6 +325,7 @@ def test_locked_single_link_with_payload_is_exact_with_clamped_mass_modes():
         payload_mass=mp,
         payload_inertia=jp,
         boundary="clamped-mass",
+        geometric_stiffening=False,
     )
     exact = BeamModes(L, ei, rho, 4, tip_mass=mp, tip_inertia=jp).frequencies
     np.testing.assert_allclose(arm.natural_frequencies(joints="locked"), exact, rtol=1e-10)
@@ -286,7 +336,12 @@ def test_locked_single_link_with_payload_converges_from_above_with_cantilever_mo
     exact = BeamModes(L, ei, rho, 1, tip_mass=mp, tip_inertia=jp).frequencies[0]
     previous = np.inf
     for n in (1, 2, 4, 8):
-        arm = fa.FlexibleArm([fa.Link(L, ei, rho, n_modes=n)], payload_mass=mp, payload_inertia=jp)
+        arm = fa.FlexibleArm(
+            [fa.Link(L, ei, rho, n_modes=n)],
+            payload_mass=mp,
+            payload_inertia=jp,
+            **LINEAR_CLAMPED_FREE,
+        )
         w1 = arm.natural_frequencies()[0]
         assert exact < w1 < previous  # Rayleigh-Ritz: upper bounds, improving
         previous = w1
@@ -296,7 +351,7 @@ def test_locked_single_link_with_payload_converges_from_above_with_cantilever_mo
 def test_free_single_link_converges_to_pinned_free_beam():
     """An unactuated single link (pin at the base) is a pinned-free beam: tan = tanh."""
     pinned_free = [3.9266023120479, 7.0685827500527]  # roots of tan x = tanh x
-    arm = fa.FlexibleArm([fa.Link(1.0, 1.0, 1.0, n_modes=16)])
+    arm = fa.FlexibleArm([fa.Link(1.0, 1.0, 1.0, n_modes=16)], **LINEAR_CLAMPED_FREE)
     w = arm.natural_frequencies(joints="free")[:2]
     np.testing.assert_allclose(np.sqrt(w), pinned_free, rtol=1e-7)
 
@@ -336,20 +391,24 @@ def test_next_link_leaves_along_the_deflected_tip_slope(scale):
 
 
 def test_deflection_of_a_single_mode_is_its_shape():
-    arm = fa.FlexibleArm([fa.Link(2.0, 3.0, 0.5, n_modes=2)])
+    arm = fa.FlexibleArm([fa.Link(2.0, 3.0, 0.5, n_modes=2)], **LINEAR_CLAMPED_FREE)
     q = np.array([0.0, 0.25, 0.0])
     x = np.linspace(0, 2.0, 9)
     ys = [arm.point_position(q, 0, xi)[1] for xi in x]
     np.testing.assert_allclose(ys, 0.25 * arm.modes[0].shape(x)[0], atol=1e-14)
 
 
-def test_payload_kinetic_energy_matches_tip_velocity():
+@pytest.mark.parametrize("stiffening", [False, True], ids=["linear", "stiffening"])
+def test_payload_kinetic_energy_matches_tip_velocity(stiffening):
     """Near-massless links: T = 1/2 m |v_tip|^2 + 1/2 J (angle rate)^2 with the
-    tip velocity from finite differences of tip_position."""
+    tip velocity from finite differences of tip_position (with stiffening, the
+    tip's foreshortening moves the payload too)."""
     mp = 2.0
     arm = fa.FlexibleArm(
         [fa.Link(1.0, 3.0, 1e-9, n_modes=2), fa.Link(0.8, 2.0, 1e-9, n_modes=1)],
         payload_mass=mp,
+        boundary="clamped-free",
+        geometric_stiffening=stiffening,
     )
     rng = np.random.default_rng(12)
     q, dq = random_state(arm, rng, scale=0.1)

@@ -123,7 +123,7 @@ def test_modes_for_a_link_on_the_command_line(capsys):
             "length",
         ),
         (["modes", "--length", "1"], "--flexural-rigidity"),
-        (["modes", "--n-modes", "-2"], "n_modes"),
+        (["modes", "--n-modes", "-2"], "--n-modes"),
         (["modes", "--n-modes", "x"], "--n-modes"),
         (["modes", "--boundary", "pinned"], "--boundary"),
         (["modes", "--normalization", "unit"], "--normalization"),

@@ -206,11 +206,16 @@ def test_scenario_builds_custom_arms_and_flexible_joints():
                 ],
                 "payload_mass": 0.3,
                 "joints": {"kind": "nonlinear", "a1": 2e4, "friction": {"g6": 0.7}},
+                "geometric_stiffening": False,
             },
             "trajectory": {"kind": "line", "start": [1.2, 0.3], "end": [1.0, 0.8], "duration": 1},
         }
     )
-    assert s.arm.n_modes == (2, 1) and s.arm.payload_mass == 0.3
+    # a link without n_modes gets Link's default; the arm, FlexibleArm's boundary default
+    default_modes = fa.Link(0.8, 2.0, 0.6).n_modes
+    assert s.arm.n_modes == (2, default_modes) and s.arm.payload_mass == 0.3
+    assert s.arm.boundary == fa.FlexibleArm(s.arm.links).boundary
+    assert s.arm.geometric_stiffening is False
     assert s.arm.has_flexible_joints and s.arm.joints[1].a1 == 2e4
     assert s.arm.joints[0].friction.g6 == 0.7
     assert s.arm.joints[0].friction.g1 == MakkarFriction.default().g1

@@ -70,9 +70,9 @@ def test_load_columns_empty_cells_are_nan(tmp_path):
     [
         ("a,b\n1,2\n3\n", ".csv", ["a", "b"], "line 3: 1 field"),
         ("a,b\n1,2\n3,oops\n", ".csv", ["a", "b"], "line 3, column 'b': 'oops' is not a number"),
-        ("a,b\n1,2\n", ".csv", ["a", "c"], "no column named 'c' \\(columns: a, b\\)"),
+        ("a,b\n1,2\n", ".csv", ["a", "c"], "no column named 'c' \\(columns: a, b;"),
         ("1 2\n3 4\n", ".txt", ["0", "5"], "column index 5 is out of range"),
-        ("1 2\n3 4\n", ".txt", ["x", "1"], "no column named 'x' \\(the file has no header\\)"),
+        ("1 2\n3 4\n", ".txt", ["x", "1"], "no column named 'x' \\(the file has no header;"),
         ("a,b\n", ".csv", ["a", "b"], "header but no data rows"),
         ("\n\n", ".txt", ["0", "1"], "holds no data"),
         ("not a zip", ".npz", ["0", "1"], "not a readable .npz"),

@@ -60,6 +60,12 @@ PUBLIC = [
     "control/controllers.py",
     "control/adaptive.py",
     "sensing/sensors.py",
+    "sim/animation.py",
+    "control/interop.py",
+    "control/custom.py",
+    "envs/config.py",
+    "envs/env.py",
+    "envs/vector.py",
     *sorted(
         str(p.relative_to(SRC))
         for p in (SRC / "studies").rglob("*.py")

@@ -152,6 +152,8 @@ def test_rotor_on_a_flexible_link_turns_with_the_tip_slope():
     arm = fa.FlexibleArm(
         [fa.Link(1.0, 5.0, 1.0, n_modes=2), fa.Link(0.8, 3.0, 1.0, n_modes=1)],
         joints=[LinearJoint(100.0, 0.3), LinearJoint(80.0, jm2)],
+        boundary="clamped-free",
+        geometric_stiffening=False,
     )
     M = arm.mass_matrix(np.zeros(arm.n_dof))
     row = np.zeros(arm.n_dof)
@@ -175,6 +177,14 @@ FLEX_ARMS = {
         [fa.Link(1.0, 5.0, 1.0, n_modes=2), fa.Link(0.8, 3.0, 0.7, n_modes=2, hub_mass=0.3)],
         joints=[NonlinearJoint(80.0, 1e3, 30.0, 50.0, 0.05, friction=friction)] * 2,
         boundary="clamped-mass",
+        geometric_stiffening=False,
+        **kw,
+    ),
+    "two-flexible-links-stiffening": lambda friction=None, **kw: fa.FlexibleArm(
+        [fa.Link(1.0, 5.0, 1.0, n_modes=2), fa.Link(0.8, 3.0, 0.7, n_modes=2, hub_mass=0.3)],
+        joints=[NonlinearJoint(80.0, 1e3, 30.0, 50.0, 0.05, friction=friction)] * 2,
+        boundary="clamped-mass",
+        geometric_stiffening=True,
         **kw,
     ),
 }
@@ -248,6 +258,8 @@ def test_power_balance_with_friction_and_motor_damping():
         [fa.Link(1.0, 5.0, 1.0, n_modes=2, modal_damping=0.02)] * 2,
         joints=[NonlinearJoint(80.0, 1e3, 30.0, 50.0, 0.05, friction=friction, motor_damping=0.3)]
         * 2,
+        boundary="clamped-free",
+        geometric_stiffening=False,
     )
     rng = np.random.default_rng(24)
     q, dq = random_state(arm, rng)

@@ -26,7 +26,8 @@ LAYERS: list[tuple[str, ...]] = [
     ("sensing",),  # what a controller can see: sensors and transport delays
     ("control",),  # references, shapers, control laws, linear analysis
     ("sim",),  # the simulator, its results and metrics, scenario files
-    ("studies",),  # the paper's reproduction, the robot-joint identification study
+    # the paper's reproduction, the robot-joint identification study; Gymnasium environments
+    ("studies", "envs"),
     ("cli",),  # the command line
     ("__main__", "__init__", "modes"),  # the package's entry points and facades
 ]
@@ -36,16 +37,21 @@ RANK = {name: k for k, names in enumerate(LAYERS) for name in names}
 # package's __init__ when that is lower still). Packages not listed are unordered.
 WITHIN: dict[str, list[str]] = {
     "model": [
+        "validity",
         "modes",
         "link",
         "joints",
         "arrays",
         "plant",
+        "foreshortening",
         "packing",
         "kinematics",
         "lagrangian",
+        "dynamics_foreshortening",
+        "dynamics_points",
         "dynamics_two_links",
         "dynamics",
+        "prescribed",
         "arm",
     ],
     "sensing": ["delays", "sensors"],
@@ -63,9 +69,12 @@ WITHIN: dict[str, list[str]] = {
         "sampling",
         "reflected",
         "lqg",
+        "interop",
+        "custom",
     ],
     "sim": [
         "metrics",
+        "animation",  # before results: SimulationResult.animate calls it
         "results",
         "integrator",
         "loop",
@@ -79,6 +88,7 @@ WITHIN: dict[str, list[str]] = {
         "scenario",
     ],
     "fuzzy": ["sets", "compiled", "system", "paper"],
+    "envs": ["config", "kernel", "core", "env", "vector"],
     "ident": [
         "options",
         "_params",

@@ -460,3 +460,61 @@ def test_fuzzy_surface_labels_can_be_given_and_are_checked():
     with pytest.raises(TypeError, match="'labels' parameter of plot_surface"):
         plot_surface(paper_system(), ax=ax, n=5, labels=("x", "y"))
     plt.close("all")
+
+
+# ------------------------------------------------------------------ the converged arm
+def test_the_matrix_runs_again_on_a_converged_arm(study):
+    """Same cases on three clamped-mass modes per link with stiffening, at the
+    converged arm's own period, judged by the same rule."""
+    conv = study.converged
+    assert conv is not None
+    assert [(c.case.sensor_model, c.case.controller, c.case.sensor) for c in conv.cases] == [
+        (c.case.sensor_model, c.case.controller, c.case.sensor) for c in study.cases
+    ]
+    for c in conv.cases:
+        assert c.case.arm == "converged" and c.result.info["n_modes"] == [3, 3]
+        assert c.result.info["dt_s"] == conv.dt_s
+    assert {c["claim"] for c in conv.claims} == {c["claim"] for c in study.claims[:3]} | {
+        c["claim"] for c in study.claims if c["sensor_model"] == "physical"
+    } - {c["claim"] for c in study.claims if "setting" in c["claim"]}
+    summary = study.summary()["converged"]
+    assert summary["arm"]["geometric_stiffening"] is True and summary["dt_s"] == conv.dt_s
+
+
+def test_the_converged_period_follows_its_rule():
+    """Half the zero-order-hold bound at the worst corner, a 1-2-5 number, never longer
+    than the study's period: the sampled loop is stable at every corner."""
+    from flexarm import FlexibleArm
+    from flexarm.control.controllers import JacobianTransposePD
+    from flexarm.control.sampling import check_sampling
+    from flexarm.control.signals import r_position, reference_size
+    from flexarm.control.trajectories import Square
+    from flexarm.sensing.sensors import JointSensor
+    from flexarm.studies.reproduction.converged import converged_period
+
+    dt = converged_period(2e-4)
+    mantissa = dt / 10 ** np.floor(np.log10(dt))
+    assert min(abs(mantissa - m) for m in (1.0, 2.0, 5.0)) < 1e-9
+    assert converged_period(dt / 2) == dt / 2
+    arm = FlexibleArm.paper(n_modes=3, boundary="clamped-mass", geometric_stiffening=True)
+    law = JacobianTransposePD.from_arm(arm)
+    for corner in Square().corners:
+        theta = arm.inverse_kinematics(corner)
+        r = np.zeros(reference_size(2))
+        r[r_position(2) : r_position(2) + 2] = corner  # at rest on the corner
+        params = law.parameters(arm)
+        for period in (dt, 2 * dt):
+            verdict = check_sampling(arm, law, JointSensor(), theta, r, params, np.zeros(0), period)
+            assert verdict.spectral_radius <= 1.0 + 1e-9
+
+
+def test_verdict_changes_are_named():
+    from flexarm.studies.reproduction.converged import verdict_changes
+
+    def claim(name, model, verdict):
+        return {"claim": name, "sensor_model": model, "verdict": verdict, "evidence": ""}
+
+    paper = [claim("A", "paper", "supported"), claim("B", "paper", "not supported")]
+    converged = [claim("A", "paper", "partly supported"), claim("B", "paper", "not supported")]
+    (change,) = verdict_changes(paper, converged)
+    assert change.startswith("A [paper sensor model]: supported") and "partly" in change

@@ -11,7 +11,7 @@ from flexarm.control.controllers import JacobianTransposePD, JointPD
 from flexarm.control.linearize import closed_loop_poles
 from flexarm.control.sampling import check_sampling
 from flexarm.control.signals import reference_size
-from flexarm.control.trajectories import Line
+from flexarm.control.trajectories import Circle
 from flexarm.sensing.sensors import JointSensor, TipSensor
 from flexarm.sim import SimulationError, simulate
 
@@ -59,7 +59,7 @@ def test_the_bound_of_a_double_integrator_in_closed_form(rod):
 
 def test_simulate_refuses_the_period_and_says_what_works(rod):
     ctrl = JointPD(kp=KP, kd=KD)
-    path = Line((0.6, 0.0), (0.5, 0.5), 1.0)  # not used by the joint law's stability
+    path = Circle(center=(0.0, 0.0), radius=1.0, period=8.0)  # on the rod's reach
     with pytest.raises(ValueError, match=r"'dt'.*dt < 0\.2 s.*check_sampling=False") as err:
         simulate(rod, ctrl, path, dt=0.25, duration=2.0)
     assert "-9.899" in str(err.value)  # the pole, to four figures

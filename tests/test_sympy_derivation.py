@@ -17,8 +17,11 @@ and a point at distance ``x`` along it is at
 .. math:: p_i(x) = o_i + R(\alpha_i) [x,\ w_i(x)]^T, \qquad
           w_i(x) = \sum_j \phi_{ij}(x) \delta_{ij},
 
-with ``o_0 = 0`` and ``o_{i+1} = p_i(L_i)``. SymPy writes ``p_i`` in the
-inertial frame with ``x`` and the shape values ``phi_ij(x)`` as plain symbols,
+with ``o_0 = 0`` and ``o_{i+1} = p_i(L_i)``. With geometric stiffening the
+point is at ``R(alpha_i) [x - u_i(x), w_i(x)]^T`` instead, with the
+foreshortening ``u_i(x) = 1/2 sum_jk S_ijk(x) delta_ij delta_ik`` and
+``S_ijk(x) = int_0^x phi_ij' phi_ik' ds``. SymPy writes ``p_i`` in the
+inertial frame with ``x``, the shape values ``phi_ij(x)`` and ``S_ijk(x)`` as plain symbols,
 differentiates it along the coordinates, ``dp/dt = (dp/dq) qdot``, expands
 ``|dp/dt|^2`` (a quadratic form in ``1, x, phi_i1(x), ...``) and integrates it
 term by term along the beam by mapping every monomial to a modal-integral
@@ -29,8 +32,10 @@ them written out, which keeps the derivation to a few seconds)::
     1 -> int rho dx = rho L        x -> int rho x dx       x**2 -> int rho x**2 dx
     phi_j -> int rho phi_j dx      x phi_j -> int rho x phi_j dx
     phi_j phi_k -> int rho phi_j phi_k dx
+    S_jk -> int rho S_jk dx      x S_jk -> int rho x S_jk dx
+    phi_a S_jk -> int rho phi_a S_jk dx      S_ab S_cd -> int rho S_ab S_cd dx
 
-Tip values ``phi_j(L)`` and ``phi_j'(L)`` are symbols too. The kinetic energy
+Tip values ``phi_j(L)``, ``phi_j'(L)`` and ``S_jk(L)`` are symbols too. The kinetic energy
 adds the hubs (``1/2 J_h alpha_i_dot**2`` and a point mass ``m_h`` at ``o_i``) and
 the payload (a point mass at ``o_N`` and a rotary inertia turning with
 ``alpha_{N-1} + w_{N-1}'(L_{N-1})``). Then ``M`` is the Hessian of ``T`` in
@@ -48,8 +53,10 @@ symbolically to the textbook rigid two-link arm (uniform rods, ``l_c = L/2``,
 ``I = m L^2 / 12``), and its kinetic energy ``1/2 qdot' M qdot`` equals a direct
 Gauss–Legendre quadrature of ``1/2 int rho |dp/dt|^2 dx`` in plain NumPy, with
 ``dp/dt`` obtained by a complex step along ``qdot`` through the kinematic map
-evaluated with :meth:`BeamModes.shape` (so the monomial-to-integral map is
-tested too).
+evaluated with :meth:`BeamModes.shape` and the foreshortening integrated from
+:meth:`BeamModes.slope` on each ``[0, x]`` (so the monomial-to-integral map and
+the foreshortening integrals of :mod:`flexarm.model.foreshortening` are tested
+too).
 """
 
 from __future__ import annotations
@@ -63,6 +70,7 @@ import pytest
 import sympy as sp
 
 import flexarm as fa
+from flexarm.model.foreshortening import foreshortening_integrals
 
 RTOL = 1e-10
 
@@ -111,9 +119,14 @@ def _integrate_along_beam(f: Any, x_index: int, phi_index: list[int], integrals:
     return f.ring.from_dict(out)
 
 
+def _pairs(n: int) -> list[tuple[int, int]]:
+    return [(a, b) for a in range(n) for b in range(a, n)]
+
+
 @functools.cache
-def derive(n_modes: tuple[int, ...]) -> Derivation:
-    """Derive ``T``, ``M(q)`` and ``h(q, qdot)`` for a planar arm with ``n_modes``.
+def derive(n_modes: tuple[int, ...], stiffening: bool = False) -> Derivation:
+    """Derive ``T``, ``M(q)`` and ``h(q, qdot)`` for a planar arm with ``n_modes``
+    (and, with ``stiffening``, the foreshortening in the kinematic map).
 
     The algebra runs in a sparse polynomial ring over the rationals whose
     generators include ``C_i = cos(alpha_i)`` and ``S_i = sin(alpha_i)``; a
@@ -130,6 +143,13 @@ def derive(n_modes: tuple[int, ...]) -> Derivation:
     n_dof = len(q)
     x = sp.Symbol("x")
     phi = [[sp.Symbol(f"phi{i + 1}_{j + 1}") for j in range(n)] for i, n in enumerate(n_modes)]
+    # S_ijk(x) (j <= k), the density variables of the foreshortening
+    shs = [
+        {jk: sp.Symbol(f"sh{i + 1}_{jk[0] + 1}_{jk[1] + 1}") for jk in _pairs(n)}
+        if stiffening
+        else {}
+        for i, n in enumerate(n_modes)
+    ]
     cs = [sp.Symbol(f"cos_alpha{i + 1}") for i in range(n_links)]
     sn = [sp.Symbol(f"sin_alpha{i + 1}") for i in range(n_links)]
 
@@ -137,12 +157,15 @@ def derive(n_modes: tuple[int, ...]) -> Derivation:
     integral_keys: list[dict[tuple[int, ...], sp.Symbol]] = []
     tip_defl: list[list[sp.Symbol]] = []
     tip_slope: list[list[sp.Symbol]] = []
+    tip_short: list[dict[tuple[int, int], sp.Symbol]] = []
     for i, n in enumerate(n_modes):
         k = i + 1
         new = [sp.Symbol(f"{a}{k}") for a in ("L", "mh", "Jh", "m", "S", "I")]
         params += new
-        zero = (0,) * n
-        unit = [tuple(int(a == j) for a in range(n)) for j in range(n)]
+        pairs = list(shs[i])
+        nv = n + len(pairs)  # density variables after x: phi_1..phi_n, then S_jk
+        zero = (0,) * nv
+        unit = [tuple(int(a == j) for a in range(nv)) for j in range(nv)]
         keys = {(0, *zero): new[3], (1, *zero): new[4], (2, *zero): new[5]}
         for j in range(n):
             keys[(0, *unit[j])] = sp.Symbol(f"c{k}_{j + 1}")  # int rho phi_j dx
@@ -150,14 +173,28 @@ def derive(n_modes: tuple[int, ...]) -> Derivation:
             for jj in range(j, n):
                 e = tuple(a + b for a, b in zip(unit[j], unit[jj], strict=True))
                 keys[(0, *e)] = sp.Symbol(f"G{k}_{j + 1}_{jj + 1}")  # int rho phi_j phi_jj
+        for p_, (a, b) in enumerate(pairs):
+            u_ = unit[n + p_]
+            keys[(0, *u_)] = sp.Symbol(f"Sm{k}_{a + 1}_{b + 1}")  # int rho S_ab dx
+            keys[(1, *u_)] = sp.Symbol(f"Sx{k}_{a + 1}_{b + 1}")  # int rho x S_ab dx
+            for j in range(n):
+                e = tuple(c + d for c, d in zip(unit[j], u_, strict=True))
+                keys[(0, *e)] = sp.Symbol(f"T3{k}_{j + 1}_{a + 1}_{b + 1}")  # int rho phi_j S_ab
+            for p2 in range(p_, len(pairs)):
+                c_, d_ = pairs[p2]
+                e = tuple(c + d for c, d in zip(u_, unit[n + p2], strict=True))
+                name = f"T4{k}_{a + 1}_{b + 1}_{c_ + 1}_{d_ + 1}"
+                keys[(0, *e)] = sp.Symbol(name)  # int rho S_ab S_cd dx
         params += [s for s in keys.values() if s not in new]
         integral_keys.append(keys)
         tip_defl.append([sp.Symbol(f"e{k}_{j + 1}") for j in range(n)])  # phi_j(L)
         tip_slope.append([sp.Symbol(f"s{k}_{j + 1}") for j in range(n)])  # phi_j'(L)
-        params += tip_defl[-1] + tip_slope[-1]
+        tip_short.append({jk: sp.Symbol(f"SL{k}_{jk[0] + 1}_{jk[1] + 1}") for jk in pairs})
+        params += tip_defl[-1] + tip_slope[-1] + list(tip_short[-1].values())
     params += [sp.Symbol("mp"), sp.Symbol("Jp")]
 
-    symbols = [x, *(p for row in phi for p in row), *cs, *sn, *q, *dq, *params]
+    dens = [sym for i in range(n_links) for sym in shs[i].values()]
+    symbols = [x, *(p for row in phi for p in row), *dens, *cs, *sn, *q, *dq, *params]
     assert len(set(symbols)) == len(symbols), "clashing symbol names"
     R, *gens = sp.ring(symbols, sp.QQ)
     g = dict(zip(symbols, gens, strict=True))
@@ -190,23 +227,33 @@ def derive(n_modes: tuple[int, ...]) -> Derivation:
 
     T = R.zero
     o = [R.zero, R.zero]  # joint position o_i
-    dlt = iter(delta)
+    start = 0
     for i in range(n_links):
         k = i + 1
         L, mh, Jh = g[sp.Symbol(f"L{k}")], g[sp.Symbol(f"mh{k}")], g[sp.Symbol(f"Jh{k}")]
         c, s = g[cs[i]], g[sn[i]]
-        w = sum((g[p] * g[next(dlt)] for p in phi[i]), R.zero)
-        p = [o[0] + c * g[x] - s * w, o[1] + s * g[x] + c * w]
+        dl = [g[d] for d in delta[start : start + n_modes[i]]]
+        start += n_modes[i]
+        w = sum((g[p] * d for p, d in zip(phi[i], dl, strict=True)), R.zero)
+        # u = 1/2 sum_jk S_jk delta_j delta_k, S symmetric: S_jj / 2, S_jk (j < k) once
+        u = sum(
+            (
+                g[sym] * dl[a] * dl[b] * (R(1) / 2 if a == b else R(1))
+                for (a, b), sym in shs[i].items()
+            ),
+            R.zero,
+        )
+        p = [o[0] + c * (g[x] - u) - s * w, o[1] + s * (g[x] - u) + c * w]
         v = [rate(p[0]), rate(p[1])]
         keys = {e: index[sym] for e, sym in integral_keys[i].items()}
-        rho_v2 = _integrate_along_beam(
-            v[0] ** 2 + v[1] ** 2, index[x], [index[p_] for p_ in phi[i]], keys
-        )
+        dens_i = [index[p_] for p_ in phi[i]] + [index[sym] for sym in shs[i].values()]
+        rho_v2 = _integrate_along_beam(v[0] ** 2 + v[1] ** 2, index[x], dens_i, keys)
         T += rho_v2 / 2
         # hub of link i: point mass at o_i, rotary inertia turning with alpha_i
         vo = [rate(o[0]), rate(o[1])]
         T += mh * (vo[0] ** 2 + vo[1] ** 2) / 2 + Jh * rate(alpha[i]) ** 2 / 2
         tip = [(g[x], L)] + [(g[a], g[b]) for a, b in zip(phi[i], tip_defl[i], strict=True)]
+        tip += [(g[sym], g[tip_short[i][jk]]) for jk, sym in shs[i].items()]
         o = [p[0].compose(tip), p[1].compose(tip)]
     # payload: point mass at o_N, rotary inertia turning with alpha_{N-1} + w'_{N-1}(L)
     vo = [rate(o[0]), rate(o[1])]
@@ -239,7 +286,8 @@ def derive(n_modes: tuple[int, ...]) -> Derivation:
 
 
 def numeric_params(arm: fa.FlexibleArm, deriv: Derivation) -> np.ndarray:
-    """Values of ``deriv.params`` for ``arm``, modal integrals from ``arm.modes``."""
+    """Values of ``deriv.params`` for ``arm``, modal integrals from ``arm.modes`` (and
+    the foreshortening integrals from :mod:`flexarm.model.foreshortening`)."""
     val: dict[str, float] = {"mp": arm.payload_mass, "Jp": arm.payload_inertia}
     for i, (lk, bm) in enumerate(zip(arm.links, arm.modes, strict=True)):
         k = i + 1
@@ -259,17 +307,32 @@ def numeric_params(arm: fa.FlexibleArm, deriv: Derivation) -> np.ndarray:
             val[f"s{k}_{j + 1}"] = bm.tip_slope[j]
             for jj in range(j, lk.n_modes):
                 val[f"G{k}_{j + 1}_{jj + 1}"] = bm.modal_mass[j, jj]
+        f = foreshortening_integrals(bm)
+        for a in range(lk.n_modes):
+            for b in range(lk.n_modes):
+                ab = f"{a + 1}_{b + 1}"
+                val |= {f"Sm{k}_{ab}": f.mass[a, b], f"Sx{k}_{ab}": f.moment[a, b]}
+                val[f"SL{k}_{ab}"] = f.tip[a, b]
+                for j in range(lk.n_modes):
+                    val[f"T3{k}_{j + 1}_{ab}"] = f.cubic[j, a, b]
+                for c in range(lk.n_modes):
+                    for d in range(lk.n_modes):
+                        val[f"T4{k}_{ab}_{c + 1}_{d + 1}"] = f.quartic[a, b, c, d]
     return np.array([float(val[s.name]) for s in deriv.params])
 
 
 # --------------------------------------------------------------------------- fixtures
-def make_arm(n_modes: tuple[int, ...], boundary: str) -> fa.FlexibleArm:
+def make_arm(n_modes: tuple[int, ...], boundary: str, stiffening: bool = False) -> fa.FlexibleArm:
     links = [
         fa.Link(L, EI, rho, n_modes=n, hub_mass=mh, hub_inertia=Jh, modal_damping=z)
         for (L, EI, rho, mh, Jh, z), n in zip(LINK_DATA, n_modes, strict=True)
     ]
     return fa.FlexibleArm(
-        links, payload_mass=PAYLOAD[0], payload_inertia=PAYLOAD[1], boundary=boundary
+        links,
+        payload_mass=PAYLOAD[0],
+        payload_inertia=PAYLOAD[1],
+        boundary=boundary,
+        geometric_stiffening=stiffening,
     )
 
 
@@ -338,6 +401,17 @@ def test_rigid_limit_is_textbook_two_link_arm() -> None:
     assert dh == sp.zeros(2, 1)
 
 
+def _shortening_by_quadrature(bm: Any, delta: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``u(x) = 1/2 int_0^x w'(s)**2 ds`` by Gauss–Legendre on each ``[0, x]``, from
+    :meth:`BeamModes.slope` alone (``delta`` may be complex: complex step)."""
+    if delta.shape[0] == 0:
+        return np.zeros_like(x)
+    t, wts = np.polynomial.legendre.leggauss(80)
+    nodes = 0.5 * x[:, None] * (t[None, :] + 1.0)  # (m, 80)
+    slope = delta @ bm.slope(nodes.ravel())  # w'(s) at every node
+    return 0.5 * (slope.reshape(nodes.shape) ** 2 @ wts) * 0.5 * x
+
+
 def _kinetic_energy_by_quadrature(arm: fa.FlexibleArm, q: np.ndarray, dq: np.ndarray) -> float:
     """``T`` straight from the kinematic map: Gauss–Legendre in ``x``, complex step in time."""
     step = 1e-30
@@ -358,9 +432,10 @@ def _kinetic_energy_by_quadrature(arm: fa.FlexibleArm, q: np.ndarray, dq: np.nda
         L = lk.length
         x = np.concatenate([0.5 * L * (t + 1.0), [L]])
         w = deltas[i] @ bm.shape(x) if lk.n_modes else np.zeros_like(x)
+        xs = x - _shortening_by_quadrature(bm, deltas[i], x) if arm.geometric_stiffening else x
         c, s = np.cos(alpha), np.sin(alpha)
-        px = o[0] + c * x - s * w
-        py = o[1] + s * x + c * w
+        px = o[0] + c * xs - s * w
+        py = o[1] + s * xs + c * w
         v2 = (px.imag / step) ** 2 + (py.imag / step) ** 2
         T += 0.5 * lk.linear_density * (0.5 * L * wts) @ v2[:-1]
         o = np.array([px[-1], py[-1]])
@@ -371,14 +446,15 @@ def _kinetic_energy_by_quadrature(arm: fa.FlexibleArm, q: np.ndarray, dq: np.nda
     return float(T)
 
 
+@pytest.mark.parametrize("stiffening", [False, True], ids=["linear", "stiffening"])
 @pytest.mark.parametrize("boundary", BOUNDARIES)
 @pytest.mark.parametrize("n_modes", MODES, ids=lambda m: "modes" + "".join(map(str, m)))
 def test_derivation_kinetic_energy_matches_quadrature(
-    n_modes: tuple[int, ...], boundary: str
+    n_modes: tuple[int, ...], boundary: str, stiffening: bool
 ) -> None:
     """``1/2 qdot' M_sympy qdot`` is the integral of ``1/2 rho |dp/dt|^2`` itself."""
-    arm = make_arm(n_modes, boundary)
-    d = derive(n_modes)
+    arm = make_arm(n_modes, boundary, stiffening)
+    d = derive(n_modes, stiffening)
     pn = numeric_params(arm, d)
     for q, dq in random_states(arm, 3, seed=7):
         M, _ = d.mass_and_bias(q, dq, pn)
@@ -387,44 +463,54 @@ def test_derivation_kinetic_energy_matches_quadrature(
 
 
 # --------------------------------------------------------------------------- the model
+@pytest.mark.parametrize("stiffening", [False, True], ids=["linear", "stiffening"])
 @pytest.mark.parametrize("boundary", BOUNDARIES)
 @pytest.mark.parametrize("n_modes", MODES, ids=lambda m: "modes" + "".join(map(str, m)))
-def test_mass_matrix_matches_sympy(n_modes: tuple[int, ...], boundary: str) -> None:
-    arm = make_arm(n_modes, boundary)
-    d = derive(n_modes)
+def test_mass_matrix_matches_sympy(
+    n_modes: tuple[int, ...], boundary: str, stiffening: bool
+) -> None:
+    arm = make_arm(n_modes, boundary, stiffening)
+    d = derive(n_modes, stiffening)
     pn = numeric_params(arm, d)
     for q, dq in random_states(arm, 5, seed=11):
         M_sym, _ = d.mass_and_bias(q, dq, pn)
         assert_close(np.asarray(arm.mass_matrix(q)), M_sym, f"M at q={q}")
 
 
+@pytest.mark.parametrize("stiffening", [False, True], ids=["linear", "stiffening"])
 @pytest.mark.parametrize("boundary", BOUNDARIES)
 @pytest.mark.parametrize("n_modes", MODES, ids=lambda m: "modes" + "".join(map(str, m)))
-def test_velocity_terms_match_sympy(n_modes: tuple[int, ...], boundary: str) -> None:
-    arm = make_arm(n_modes, boundary)
-    d = derive(n_modes)
+def test_velocity_terms_match_sympy(
+    n_modes: tuple[int, ...], boundary: str, stiffening: bool
+) -> None:
+    arm = make_arm(n_modes, boundary, stiffening)
+    d = derive(n_modes, stiffening)
     pn = numeric_params(arm, d)
     for q, dq in random_states(arm, 5, seed=13):
         _, h_sym = d.mass_and_bias(q, dq, pn)
         assert_close(arm.velocity_terms(q, dq), h_sym, f"C dq at q={q}, dq={dq}")
 
 
+@pytest.mark.parametrize("stiffening", [False, True], ids=["linear", "stiffening"])
 @pytest.mark.parametrize("boundary", BOUNDARIES)
 @pytest.mark.parametrize("n_modes", MODES, ids=lambda m: "modes" + "".join(map(str, m)))
-def test_coriolis_matrix_times_rates_matches_sympy(n_modes: tuple[int, ...], boundary: str) -> None:
-    arm = make_arm(n_modes, boundary)
-    d = derive(n_modes)
+def test_coriolis_matrix_times_rates_matches_sympy(
+    n_modes: tuple[int, ...], boundary: str, stiffening: bool
+) -> None:
+    arm = make_arm(n_modes, boundary, stiffening)
+    d = derive(n_modes, stiffening)
     pn = numeric_params(arm, d)
     for q, dq in random_states(arm, 5, seed=17):
         _, h_sym = d.mass_and_bias(q, dq, pn)
         assert_close(arm.coriolis(q, dq) @ dq, h_sym, f"C(q, dq) dq at q={q}, dq={dq}")
 
 
+@pytest.mark.parametrize("stiffening", [False, True], ids=["linear", "stiffening"])
 @pytest.mark.parametrize("backend", ["compiled", "numpy"])
-def test_forward_dynamics_matches_sympy(backend: str) -> None:
+def test_forward_dynamics_matches_sympy(backend: str, stiffening: bool) -> None:
     n_modes, boundary = (2, 2), "clamped-mass"
-    arm = make_arm(n_modes, boundary)
-    d = derive(n_modes)
+    arm = make_arm(n_modes, boundary, stiffening)
+    d = derive(n_modes, stiffening)
     pn = numeric_params(arm, d)
     K, D, B = arm.stiffness_matrix, arm.damping_matrix, arm.input_matrix
     assert np.any(np.diag(D) > 0)  # damping is exercised

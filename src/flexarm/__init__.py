@@ -10,6 +10,7 @@ controllers, sensors, references -> results; data -> estimators):
 * :mod:`flexarm.fuzzy` — Mamdani fuzzy inference (the paper's adaptive law);
 * :mod:`flexarm.ident` — kernel regression and Hammerstein identification;
 * :mod:`flexarm.studies` — the paper's reproduction and the robot-joint study;
+* :mod:`flexarm.envs` — Gymnasium environments (the ``rl`` extra);
 * :mod:`flexarm.cli` — the ``flexarm`` command.
 
 Everything is imported on first use: ``import flexarm`` is cheap (no Numba, no
@@ -27,6 +28,7 @@ from ._version import __version__
 _SUBPACKAGES = (
     "cli",
     "control",
+    "envs",
     "fuzzy",
     "ident",
     "model",

@@ -14,7 +14,6 @@ import math
 import os
 import secrets
 import shutil
-import tempfile
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
@@ -38,20 +37,30 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """
     target = Path(path)
     remove_stale(target)
-    fd, name = tempfile.mkstemp(
-        dir=target.parent, prefix=f".{target.name}.{os.getpid()}.", suffix=".tmp"
-    )
-    os.close(fd)
-    tmp = Path(name)
+    tmp: Path | None = None
     try:
+        while True:
+            # named before it is created: an interruption at any point finds it to remove
+            tmp = _temporary_name(target)
+            try:
+                os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+                break
+            except FileExistsError:  # pragma: no cover - 32 random bits and our pid
+                tmp = None
         yield tmp
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, target)
     except BaseException:
-        tmp.unlink(missing_ok=True)
+        if tmp is not None:
+            tmp.unlink(missing_ok=True)
         raise
+
+
+def _temporary_name(target: Path) -> Path:
+    """``.{target}.{pid}.{random}.tmp`` beside ``target`` (see the module docstring)."""
+    return target.parent / f".{target.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
 
 
 @contextmanager
@@ -63,18 +72,21 @@ def output_directory(out: Path) -> Iterator[Path]:
     temporary directory is removed and ``out`` is left as it was.
     """
     remove_stale(out)
-    while True:
-        tmp = out.parent / f".{out.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
-        try:
-            tmp.mkdir()
-            break
-        except FileExistsError:  # pragma: no cover - 32 random bits
-            continue
+    tmp: Path | None = None
     try:
+        while True:
+            # named before it is created: an interruption at any point finds it to remove
+            tmp = _temporary_name(out)
+            try:
+                tmp.mkdir()
+                break
+            except FileExistsError:  # pragma: no cover - 32 random bits and our pid
+                tmp = None
         yield tmp
         os.replace(tmp, out)  # atomic; replaces an empty directory
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
         raise
 
 

@@ -149,12 +149,13 @@ def check_array(
     shape: tuple[int, ...] | None = None,
     finite: bool = True,
     dtype: type = float,
+    real: bool = False,
 ) -> NDArray[Any]:
     """Return ``value`` as a NumPy array of ``dtype`` with the given shape, or raise.
 
     ``shape`` entries of ``-1`` accept any length along that axis. Complex input
     is kept complex when ``dtype`` is float (the complex-step derivatives of the
-    mass matrix rely on it).
+    mass matrix rely on it), unless ``real`` is set: then it is refused.
     """
     try:
         arr = np.asarray(value)
@@ -165,6 +166,15 @@ def check_array(
     if arr.dtype.kind not in "biufc":
         raise InvalidTypeError(
             _fail(name, owner, "a numeric array", _Described(f"dtype {arr.dtype}"))
+        )
+    if arr.dtype.kind == "c" and real:
+        raise InvalidTypeError(
+            _fail(
+                name,
+                owner,
+                "real",
+                _Described(f"a complex {'value' if arr.ndim == 0 else 'array'}"),
+            )
         )
     if arr.dtype.kind != "c":
         arr = arr.astype(dtype, copy=False)

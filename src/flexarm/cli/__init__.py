@@ -75,7 +75,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     except (InvalidValueError, InvalidTypeError) as exc:
         # flexarm's own input checks; any other exception is a bug and shows its traceback
-        print(f"flexarm: error: {exc}", file=sys.stderr)
+        print(f"{prog}: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except Stopped as exc:
         print(f"{prog}: {exc}", file=sys.stderr)

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import errno
+import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import NoReturn
 
@@ -20,6 +23,7 @@ __all__ = [
     "UsageError",
     "check_out",
     "json_ready",
+    "number",
     "output_directory",
 ]
 
@@ -48,11 +52,54 @@ class UsageError(Exception):
     """Bad input on the command line (exit status 2)."""
 
 
+def number(
+    *, positive: bool = False, nonnegative: bool = False, integer: bool = False, minimum: int = 0
+) -> Callable[[str], float]:
+    """An argparse ``type``: a finite number (``positive``, ``nonnegative``), or an
+    integer ``>= minimum``; the parser names the option in its one-line error."""
+
+    def parse(text: str) -> float:
+        try:
+            value = int(text) if integer else float(text)
+        except ValueError:
+            kind = "an integer" if integer else "a number"
+            raise argparse.ArgumentTypeError(f"must be {kind}. Got {text!r} instead.") from None
+        if integer:
+            if value < minimum:
+                raise argparse.ArgumentTypeError(f"must be >= {minimum}. Got {text!r} instead.")
+            return value
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"must be finite. Got {text!r} instead.")
+        if positive and not value > 0:
+            raise argparse.ArgumentTypeError(f"must be > 0. Got {text!r} instead.")
+        if nonnegative and not value >= 0:
+            raise argparse.ArgumentTypeError(f"must be >= 0. Got {text!r} instead.")
+        return value
+
+    return parse
+
+
 class Parser(argparse.ArgumentParser):
     """An argument parser whose errors are one line, not a usage dump."""
 
     def error(self, message: str) -> NoReturn:
         raise UsageError(f"{self.prog}: error: {message}")
+
+
+def write_failed(prog: str, out: Path, exc: OSError) -> str:
+    """The one line for results that could not be written into ``out``: what the
+    system said, in words that say what to do."""
+    reasons = {
+        errno.EROFS: "the file system is read-only",
+        errno.EACCES: "permission denied",
+        errno.EPERM: "permission denied",
+        errno.ENOSPC: "the disk is full",
+        errno.EDQUOT: "the disk quota is exceeded",
+        errno.EBUSY: "it is a mount point or in use (choose a new directory inside it)",
+        errno.EXDEV: "it is on another file system than its parent directory",
+    }
+    reason = reasons.get(exc.errno or 0, exc.strerror or str(exc))
+    return f"{prog}: error: cannot write the results into {str(out)!r}: {reason}; nothing written"
 
 
 def check_out(out: Path, prog: str) -> None:

@@ -107,7 +107,9 @@ def _fit_data(args: argparse.Namespace) -> int:
     seed = 0 if args.seed is None else args.seed
     with library_errors(PROG), warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentificationWarning)  # in the summary instead
-        u, y, dropped = read_xy(args.data, **columns, drop_nan=args.drop_nan)
+        u, y, dropped = read_xy(
+            args.data, **columns, drop_nan=args.drop_nan, delimiter=args.delimiter
+        )
         res = fit_hammerstein(
             u,
             y,
@@ -283,7 +285,9 @@ def add_parser(isub: Any) -> None:
     )
     p.add_argument("data", nargs="?", metavar="DATA", help="data file (.csv, .npz or text)")
     p.add_argument("--lags", type=positive_int(2), metavar="N", help="impulse response length (40)")
-    p.add_argument("--seed", type=int, metavar="S", help="seed: bootstrap, or robot (default 0)")
+    p.add_argument(
+        "--seed", type=positive_int(0), metavar="S", help="seed: bootstrap, or robot (default 0)"
+    )
     p.add_argument("--out", metavar="DIR", help="write the results into DIR (new or empty)")
     p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
     d = p.add_argument_group("with DATA")
@@ -291,6 +295,11 @@ def add_parser(isub: Any) -> None:
         d.add_argument("--x", metavar="COL", help="input column: name or 0-based index (0)"),
         d.add_argument("--y", metavar="COL", help="output column: name or index (1)"),
         d.add_argument("--drop-nan", action="store_true", help="drop rows with NaN"),
+        d.add_argument(
+            "--delimiter",
+            metavar="C",
+            help="column separator of a text file (default: ',' for .csv, else whitespace)",
+        ),
         d.add_argument(
             "--method",
             choices=METHODS,

@@ -13,7 +13,16 @@ from typing import Any
 
 from ..errors import InvalidTypeError, InvalidValueError
 from ..ident.options import BANDWIDTH_RULES
-from ._common import EXIT_FAILURE, Parser, UsageError, check_out, json_ready, output_directory
+from ._common import (
+    EXIT_FAILURE,
+    Parser,
+    UsageError,
+    check_out,
+    json_ready,
+    number,
+    output_directory,
+    write_failed,
+)
 
 __all__ = [
     "CommandParser",
@@ -66,19 +75,12 @@ def parse_bandwidth(text: str) -> float | str:
 
 def positive_int(minimum: int) -> Callable[[str], int]:
     """An ``argparse`` type: an integer ``>= minimum``."""
+    parse = number(integer=True, minimum=minimum)
 
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            value = minimum - 1
-        if value < minimum:
-            raise argparse.ArgumentTypeError(
-                f"must be an integer >= {minimum}. Got {text!r} instead."
-            )
-        return value
+    def as_int(text: str) -> int:
+        return int(parse(text))
 
-    return parse
+    return as_int
 
 
 def given(args: argparse.Namespace, **names: str) -> dict[str, Any]:
@@ -108,7 +110,7 @@ def report(
                 summary["files"] = [*dict.fromkeys([*names, "summary.json"])]
                 (tmp / "summary.json").write_text(json.dumps(json_ready(summary), indent=2) + "\n")
         except OSError as exc:
-            print(f"{prog}: error: cannot write {str(out)!r}: {exc}", file=sys.stderr)
+            print(write_failed(prog, out, exc), file=sys.stderr)
             return EXIT_FAILURE
     if args.json:
         print(json.dumps(json_ready(summary), indent=2))

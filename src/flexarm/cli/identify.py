@@ -22,6 +22,7 @@ from typing import Any
 
 from ..ident.options import DISTRIBUTIONS, KERNELS, REGRESSION_FUNCTIONS
 from . import _hammerstein
+from ._common import UsageError
 from ._identify_common import (
     CommandParser,
     check_out_option,
@@ -48,7 +49,9 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     check_out_option(args, prog)
     t0 = time.perf_counter()
     with library_errors(prog):
-        x, y, dropped = read_xy(args.data, args.x, args.y, drop_nan=args.drop_nan)
+        x, y, dropped = read_xy(
+            args.data, args.x, args.y, drop_nan=args.drop_nan, delimiter=args.delimiter
+        )
         res = fit_regression(
             x,
             y,
@@ -108,6 +111,13 @@ def _cmd_study(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     with library_errors(prog):
         sizes = given(args, n_min="n_min", n_max="n_max", steps="n_steps")
+        lo, hi = sizes.get("n_min", 250), sizes.get("n_max", 16000)  # sample_sizes' defaults
+        if lo >= hi:
+            which = "--n-max" if "n_max" in sizes else "--n-min"
+            raise UsageError(
+                f"{prog}: error: argument {which}: --n-max must be larger than --n-min. "
+                f"Got --n-min {lo} and --n-max {hi} instead."
+            )
         res = convergence_study(
             args.function,
             n=sample_sizes(**sizes) if sizes else None,
@@ -174,7 +184,8 @@ line on stderr, nothing written).
 
 _FIT_EPILOG = """\
 data: .csv (comma-separated), .npz (1-D arrays named by key, or one 2-D table), or
-whitespace-separated text ('#' comments). A first line with a non-numeric cell is
+whitespace-separated text ('#' comments); --delimiter ';' (or any one character)
+reads a text file separated by it. A first line with a non-numeric cell is
 a header. --x and --y take a header name or a 0-based column index. Empty cells
 and 'nan' are NaN: rows with NaN in the chosen columns are an error unless
 --drop-nan (the count dropped is reported).
@@ -266,6 +277,11 @@ def add_parser(sub: Any) -> None:
         help="gaussian with --decay 0: fast series sums (same estimate to rounding)",
     )
     fit.add_argument("--drop-nan", action="store_true", help="drop rows with NaN (else an error)")
+    fit.add_argument(
+        "--delimiter",
+        metavar="C",
+        help="column separator of a text file (default: ',' for .csv, else whitespace)",
+    )
     _add_output_options(fit)
     fit.set_defaults(func=_cmd_fit)
 
@@ -284,7 +300,9 @@ def add_parser(sub: Any) -> None:
     study.add_argument("--n-max", type=positive_int(1), metavar="N", help="largest n")
     study.add_argument("--n-steps", type=positive_int(2), metavar="K", help="sample sizes")
     study.add_argument("--repetitions", type=positive_int(2), metavar="R", help="data sets")
-    study.add_argument("--seed", type=int, default=0, metavar="S", help="seed (default 0)")
+    study.add_argument(
+        "--seed", type=positive_int(0), default=0, metavar="S", help="seed (default 0)"
+    )
     study.add_argument("--noise", type=float, metavar="SIGMA", help="noise std (default 0.1)")
     study.add_argument("--distribution", choices=DISTRIBUTIONS, help="inputs (default uniform)")
     _add_estimator_options(study, "1/(2p+1)")

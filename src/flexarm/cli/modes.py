@@ -11,7 +11,7 @@ import numpy as np
 from ..model.arm import BOUNDARIES, FlexibleArm
 from ..model.joints import LinearJoint, MakkarFriction, NonlinearJoint
 from ..model.modes import NORMALIZATIONS, BeamModes
-from ._common import UsageError
+from ._common import UsageError, number
 
 __all__ = ["add_parser"]
 
@@ -160,14 +160,22 @@ def add_parser(sub: Any) -> None:
             "and --linear-density."
         ),
     )
-    modes.add_argument("--n-modes", type=int, default=None, help="modes per link (arm: 1, link: 3)")
-    modes.add_argument("--boundary", choices=BOUNDARIES, default=None, help="arm mode boundary")
-    modes.add_argument("--length", type=float, help="link length, m")
-    modes.add_argument("--flexural-rigidity", type=float, help="EI, N m^2")
-    modes.add_argument("--linear-density", type=float, help="rho, kg/m")
-    modes.add_argument("--tip-mass", type=float, default=0.0, help="tip mass, kg (single link)")
     modes.add_argument(
-        "--tip-inertia", type=float, default=0.0, help="tip inertia, kg m^2 (single link)"
+        "--n-modes",
+        type=number(integer=True, minimum=1),
+        default=None,
+        help="modes per link (arm: 1, link: 3)",
+    )
+    modes.add_argument("--boundary", choices=BOUNDARIES, default=None, help="arm mode boundary")
+    positive, nonnegative = number(positive=True), number(nonnegative=True)
+    modes.add_argument("--length", type=positive, help="link length, m")
+    modes.add_argument("--flexural-rigidity", type=positive, help="EI, N m^2")
+    modes.add_argument("--linear-density", type=positive, help="rho, kg/m")
+    modes.add_argument(
+        "--tip-mass", type=nonnegative, default=0.0, help="tip mass, kg (single link)"
+    )
+    modes.add_argument(
+        "--tip-inertia", type=nonnegative, default=0.0, help="tip inertia, kg m^2 (single link)"
     )
     modes.add_argument(
         "--joints",
@@ -177,7 +185,7 @@ def add_parser(sub: Any) -> None:
     )
     modes.add_argument("--normalization", choices=NORMALIZATIONS, default="mass")
     modes.add_argument(
-        "--amplitude", type=float, default=0.1, help="the paper's A (amplitude normalisation)"
+        "--amplitude", type=positive, default=0.1, help="the paper's A (amplitude normalisation)"
     )
     modes.add_argument("--json", action="store_true", help="print a JSON summary")
     modes.set_defaults(func=_cmd_modes)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 from pathlib import Path
@@ -18,7 +19,7 @@ from ..studies.reproduction.cases import (
     DEFAULT_LAW,
     DEFAULT_TOLERANCE,
 )
-from ._common import EXIT_FAILURE, UsageError, check_out
+from ._common import EXIT_FAILURE, UsageError, check_out, write_failed
 
 __all__ = ["add_parser"]
 
@@ -26,16 +27,15 @@ _PROG = "flexarm reproduce"
 
 
 def _ks_list(text: str) -> tuple[float, ...]:
+    fail = argparse.ArgumentTypeError(
+        f"must be comma-separated finite numbers >= 0. Got {text!r} instead."
+    )
     try:
-        values = tuple(float(v) for v in text.split(",") if v.strip())
+        values = tuple(float(v) for v in text.split(","))
     except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"must be comma-separated numbers >= 0. Got {text!r} instead."
-        ) from None
-    if not values or any(not (v >= 0) for v in values):
-        raise argparse.ArgumentTypeError(
-            f"must be comma-separated numbers >= 0. Got {text!r} instead."
-        )
+        raise fail from None
+    if not values or not all(math.isfinite(v) and v >= 0 for v in values):
+        raise fail
     return values
 
 
@@ -53,6 +53,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
             ks_range=args.ks_range,
             sensitivity=args.sensitivity,
             beyond=args.beyond,
+            converged=args.converged,
             tolerance=args.tolerance,
             workers=args.workers,
             progress=None if not args.json else False,
@@ -62,7 +63,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     try:
         files = rep.write(out)
     except OSError as exc:
-        print(f"{_PROG}: error: cannot write {str(out)!r}: {exc}", file=sys.stderr)
+        print(write_failed(_PROG, out, exc), file=sys.stderr)
         return EXIT_FAILURE
     if args.json:
         print(json.dumps({**rep.summary(), "out": str(out), "files": files}, indent=2))
@@ -151,6 +152,13 @@ def add_parser(sub: Any) -> None:
         default=True,
         help="run the study beyond the paper: LQG and the reflected tip on the physical "
         "distant sensors, with robustness rows (default on)",
+    )
+    p.add_argument(
+        "--converged",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="rerun the matrix on a converged arm (3 clamped-mass modes per link, geometric "
+        "stiffening) and judge the claims there too (default on)",
     )
     p.add_argument(
         "--tolerance",

@@ -5,13 +5,16 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..control.custom import FACTORY_SPEC
 from ..errors import InvalidTypeError, InvalidValueError
 from ..sensing.delays import DELAY_METHODS
 from ..sensing.sensors import SENSOR_MODELS, PointSensor, Sensor, parse_sensor
+from ..sim.animation import ANIMATION_FORMATS
 from ..sim.results import RESULT_FILES, SimulationError
 from ..sim.scenario_schema import (
     CONTROLLERS,
@@ -22,7 +25,7 @@ from ..sim.scenario_schema import (
     apply_overrides,
     read_scenario,
 )
-from ._common import EXIT_FAILURE, UsageError, check_out, json_ready
+from ._common import EXIT_FAILURE, UsageError, check_out, json_ready, write_failed
 
 if TYPE_CHECKING:
     from ..sim.scenario import Scenario
@@ -58,6 +61,15 @@ def _sensor_option(text: str) -> Sensor:
         return parse_sensor(text)
     except (TypeError, ValueError) as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _controller_option(text: str) -> str:
+    if text in CONTROLLERS or FACTORY_SPEC.match(text):
+        return text
+    raise argparse.ArgumentTypeError(
+        f"must be one of {', '.join(CONTROLLERS)} or MODULE:FACTORY (your own). "
+        f"Got {text!r} instead."
+    )
 
 
 def _delay_option(text: str) -> str | float:
@@ -160,11 +172,28 @@ def _format_summary(summary: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _check_animate(path: str | None) -> Path | None:
+    """The ``--animate`` file, checked before anything runs: a .gif or .mp4 (ffmpeg on
+    PATH) in an existing directory."""
+    if path is None:
+        return None
+    target = Path(os.path.abspath(path))
+    option = "flexarm simulate: error: argument --animate"
+    if target.suffix.lower() not in ANIMATION_FORMATS:
+        raise UsageError(f"{option}: must end in .gif or .mp4. Got {path!r} instead.")
+    if target.suffix.lower() == ".mp4" and shutil.which("ffmpeg") is None:
+        raise UsageError(f"{option}: writing an MP4 needs ffmpeg on PATH (not found); use a .gif")
+    if not target.parent.is_dir():
+        raise UsageError(f"{option}: no such directory: {str(target.parent)!r}")
+    return target
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
     scenario = _build_scenario(args)
     out = Path(os.path.abspath(args.out)) if args.out is not None else None
     if out is not None:
         check_out(out, "flexarm simulate")
+    movie = _check_animate(args.animate)
     from ..sim.closed_loop import simulate
 
     try:
@@ -190,16 +219,27 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             "run": result.info,
             "out": args.out,
             "files": [] if out is None else list(RESULT_FILES),
+            "animation": None if movie is None else str(movie),
         }
     )
     if out is not None:
         try:
             result.write(out, summary)
         except OSError as exc:
-            print(f"flexarm simulate: error: cannot write {str(out)!r}: {exc}", file=sys.stderr)
+            print(write_failed("flexarm simulate", out, exc), file=sys.stderr)
+            return EXIT_FAILURE
+    if movie is not None:  # a diverged run's partial result too: watch it go
+        from ..sim.animation import write_animation
+
+        try:
+            write_animation(result, movie)
+        except OSError as exc:
+            print(f"flexarm simulate: error: cannot write {str(movie)!r}: {exc}", file=sys.stderr)
             return EXIT_FAILURE
     if diverged is not None:
         kept = f"; the run up to then is in {out}" if out is not None else "; nothing written"
+        if out is None and movie is not None:
+            kept = f"; the run up to then is drawn in {movie}"
         print(
             f"flexarm simulate: the simulation diverged at t = {diverged.time:.6g} s (state "
             f"non-finite, overflowing or a tip deflection beyond max_deflection){kept}",
@@ -259,13 +299,16 @@ def add_parser(sub: Any) -> None:
     sim.add_argument("--scenario", metavar="FILE.toml", help="scenario file (TOML)")
     sim.add_argument(
         "--controller",
-        choices=CONTROLLERS,
+        type=_controller_option,
+        metavar="|".join((*CONTROLLERS, "MODULE:FACTORY")),
         help="pd: the paper's Jacobian-transpose PD gains from the first link's first "
         "frequency (default); jt-pd: JacobianTransposePD with the scenario's kp, kd; "
         "joint-pd: JointPD; fuzzy: the paper's gains with the fuzzy adaptive law "
         "(FuzzyAdaptiveJTPD; set ks and law in the scenario file); lqg: observer-based "
         "LQG from the sensor alone with rigid feedforward; reflected: PD on the reflected "
-        "output (alpha in the scenario file)",
+        "output (alpha in the scenario file); MODULE:FACTORY: your own, FACTORY(arm, **the "
+        "scenario's other controller keys) returning a Controller (module from the current "
+        "directory or sys.path; examples/my_controller.py)",
     )
     sim.add_argument(
         "--sensor",
@@ -336,5 +379,11 @@ def add_parser(sub: Any) -> None:
     )
     sim.add_argument("--seed", type=int, metavar="N", help="seed of the sensor noise")
     sim.add_argument("--out", metavar="DIR", help="write the results into DIR (see below)")
+    sim.add_argument(
+        "--animate",
+        metavar="FILE.gif|FILE.mp4",
+        help="write an animation of the deflected arm (25 frames per simulated second; GIF "
+        "through Pillow, MP4 through ffmpeg, which must be on PATH)",
+    )
     sim.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
     sim.set_defaults(func=_cmd_simulate)

@@ -251,7 +251,7 @@ def _ptr(a: NDArray[np.float64]) -> object:
 
 
 def _gain_vector(value: ArrayLike, name: str, owner: str, n: int) -> NDArray[np.float64]:
-    g = check_array(value, name, owner)
+    g = check_array(value, name, owner, real=True)
     if g.ndim == 0:
         g = np.full(n, float(g))
     if g.shape != (n,):
@@ -265,7 +265,7 @@ def _gain_vector(value: ArrayLike, name: str, owner: str, n: int) -> NDArray[np.
 
 
 def _gain_matrix(value: ArrayLike, name: str, owner: str) -> NDArray[np.float64]:
-    g = check_array(value, name, owner)
+    g = check_array(value, name, owner, real=True)
     if g.ndim == 0:
         g = float(g) * np.eye(2)
     elif g.shape == (2,):
@@ -274,6 +274,13 @@ def _gain_matrix(value: ArrayLike, name: str, owner: str) -> NDArray[np.float64]
         raise InvalidValueError(
             f"The '{name}' parameter of {owner} must be a scalar, of shape (2,) or (2, 2). "
             f"Got shape {g.shape} instead."
+        )
+    lowest = float(np.linalg.eigvalsh(0.5 * g + 0.5 * g.T).min())  # no overflow near 1e308
+    if lowest < 0.0:
+        raise InvalidValueError(
+            f"The '{name}' parameter of {owner} must be positive semidefinite (a gain that "
+            f"pushes away from the reference is not a PD law). Got {value!r}, whose "
+            f"symmetric part has the eigenvalue {lowest:.6g}, instead."
         )
     return g
 
@@ -338,6 +345,10 @@ class JacobianTransposePD(Controller):
     kp: ArrayLike = 150.79
     kd: ArrayLike = 17.364
     name = "jt-pd"
+
+    def __post_init__(self) -> None:
+        for gain in ("kp", "kd"):  # checked now, not at the first run
+            _gain_matrix(getattr(self, gain), gain, type(self).__name__)
 
     @classmethod
     def from_arm(cls, arm: Plant, zeta: float = 0.707) -> JacobianTransposePD:

@@ -79,8 +79,9 @@ class SamplingCheck:
         while the loop applied continuously is stable (a static law)."""
         return not self.stable and self.continuous_stable and self.max_period is not None
 
-    def message(self, owner: str = "simulate") -> str:
-        """One sentence for an error: which pole, which period would work."""
+    def message(self, owner: str = "simulate", note: str = "") -> str:
+        """One sentence for an error: which pole, which period would work (and
+        ``note``, a clause about the arm, e.g. that it has no hubs)."""
         head = (
             f"The 'dt' parameter of {owner} must make the sampled loop stable: linearised at "
             f"the start, the loop sampled at dt = {self.dt:g} s has a discrete pole at |z| = "
@@ -93,11 +94,11 @@ class SamplingCheck:
         if self.max_period is not None:
             use = float(f"{0.8 * self.max_period:.1g}")
             head += (
-                f", and a zero-order hold needs dt < {self.max_period:.3g} s. Use dt <= {use:g} s "
-                "(or an arm with hub inertia, or lower gains)"
+                f", and a zero-order hold needs dt < {self.max_period:.3g} s{note}. Use dt <= "
+                f"{use:g} s (or an arm with hub inertia, or lower gains)"
             )
         else:
-            head += ". Use a shorter period or a law designed for this one"
+            head += f"{note}. Use a shorter period or a law designed for this one"
         return head + ", or pass check_sampling=False to run it anyway."
 
 

@@ -5,7 +5,9 @@ Formats
 * ``.npz``: 1-D arrays named by their keys (all of one length), or a single
   2-D table whose columns are numbered;
 * ``.csv``: comma-separated (Python's :mod:`csv`, strict quoting);
-* anything else: whitespace-separated text, ``#`` starts a comment.
+* anything else: whitespace-separated text, ``#`` starts a comment;
+* any text file with ``delimiter`` given (``";"``, ``"\t"``, ...): separated by
+  it (Python's :mod:`csv`).
 
 A text file has a header when its first line has a non-numeric cell. Empty
 cells and ``nan`` read as NaN; only the chosen columns must be numeric. Every
@@ -37,12 +39,39 @@ class DataError(InvalidValueError):
     """A data file that cannot give the requested columns (one-line message)."""
 
 
-def _layout(path: Path) -> str:
-    return "comma-separated CSV" if path.suffix.lower() == ".csv" else "whitespace-separated text"
+_OTHER_DELIMITERS = (";", "\t", "|", ",")
 
 
-def _rows(path: Path) -> list[tuple[int, list[str]]]:
-    """``(line number, cells)`` of the non-blank lines: CSV for ``.csv``, else whitespace."""
+def _separator(path: Path, delimiter: str | None) -> str | None:
+    """The delimiter in use: the one given, ``","`` for ``.csv``, None for whitespace."""
+    if delimiter is not None:
+        return delimiter
+    return "," if path.suffix.lower() == ".csv" else None
+
+
+def _layout(path: Path, delimiter: str | None) -> str:
+    sep = _separator(path, delimiter)
+    if sep is None:
+        return "whitespace-separated text"
+    return "comma-separated CSV" if sep == "," else f"text separated by {sep!r}"
+
+
+def _hint(path: Path, delimiter: str | None, first_line: str) -> str:
+    """How the file was read, and a guess at its delimiter when another one shows."""
+    sep = _separator(path, delimiter)
+    guess = next((d for d in _OTHER_DELIMITERS if d != sep and d in first_line), None)
+    text = f"read as {_layout(path, delimiter)}"
+    if guess is not None:
+        text += (
+            f"; its lines contain {guess!r}: give delimiter={guess!r} (--delimiter) if "
+            "that separates the columns"
+        )
+    return text
+
+
+def _rows(path: Path, delimiter: str | None = None) -> list[tuple[int, list[str]]]:
+    """``(line number, cells)`` of the non-blank lines: separated by ``delimiter``, by
+    commas for ``.csv``, else by whitespace."""
     try:
         with open(path, newline="", encoding="utf-8") as f:
             text = f.read()
@@ -51,11 +80,14 @@ def _rows(path: Path) -> list[tuple[int, list[str]]]:
     except OSError as exc:
         raise DataError(f"{str(path)!r} cannot be read ({exc.strerror or exc})") from None
     lines = text.splitlines()
-    if path.suffix.lower() == ".csv":
+    sep = _separator(path, delimiter)
+    if sep is not None:
         try:
-            parsed = list(csv.reader(lines, strict=True))
+            parsed = list(csv.reader(lines, delimiter=sep, strict=True))
         except csv.Error as exc:
-            raise DataError(f"{str(path)!r} is not valid comma-separated CSV: {exc}") from None
+            raise DataError(
+                f"{str(path)!r} is not valid {_layout(path, delimiter)}: {exc}"
+            ) from None
         return [(k + 1, [c.strip() for c in row]) for k, row in enumerate(parsed) if row]
     out = []
     for k, line in enumerate(lines):
@@ -73,17 +105,21 @@ def _is_number(cell: str) -> bool:
     return True
 
 
-def _pick(spec: str | int, names: list[str] | None, width: int, path: Path) -> int:
-    """Column index of ``spec``: a header name, else a 0-based index."""
+def _pick(spec: str | int, names: list[str] | None, width: int, path: Path, how: str = "") -> int:
+    """Column index of ``spec``: a header name, else a 0-based index (``how``: how the
+    file was read, for the message)."""
     if isinstance(spec, str) and names is not None and spec in names:
         return names.index(spec)
+    how = f"; {how}" if how else ""
     try:
         index = int(spec)
     except ValueError:
         known = f"columns: {', '.join(names)}" if names else "the file has no header"
-        raise DataError(f"{str(path)!r}: no column named {spec!r} ({known})") from None
+        raise DataError(f"{str(path)!r}: no column named {spec!r} ({known}{how})") from None
     if not 0 <= index < width:
-        raise DataError(f"{str(path)!r}: column index {index} is out of range ({width} column(s))")
+        raise DataError(
+            f"{str(path)!r}: column index {index} is out of range ({width} column(s){how})"
+        )
     return index
 
 
@@ -122,7 +158,12 @@ def _load_npz(path: Path, columns: Sequence[str | int]) -> tuple[F64, ...]:
     return tuple(out)
 
 
-def load_columns(path: str | os.PathLike[str], columns: Sequence[str | int]) -> tuple[F64, ...]:
+def load_columns(
+    path: str | os.PathLike[str],
+    columns: Sequence[str | int],
+    *,
+    delimiter: str | None = None,
+) -> tuple[F64, ...]:
     """Read the named or numbered columns of a data file as float arrays (module docstring).
 
     Parameters
@@ -132,6 +173,9 @@ def load_columns(path: str | os.PathLike[str], columns: Sequence[str | int]) -> 
     columns : sequence of str or int
         Each a header name or a 0-based column index (a string of digits that
         is not a header name counts as an index).
+    delimiter : str, optional
+        One character separating the columns of a text file (default: ``","``
+        for ``.csv``, whitespace otherwise). Not for ``.npz``.
 
     Returns
     -------
@@ -158,12 +202,18 @@ def load_columns(path: str | os.PathLike[str], columns: Sequence[str | int]) -> 
         raise DataError(f"{str(p)!r} does not exist")
     if not p.is_file():
         raise DataError(f"{str(p)!r} is not a file")
+    if delimiter is not None and (not isinstance(delimiter, str) or len(delimiter) != 1):
+        raise DataError(
+            f"The 'delimiter' parameter of load_columns must be one character. Got "
+            f"{delimiter!r} instead."
+        )
     if p.suffix.lower() == ".npz":
         return _load_npz(p, columns)
-    rows = _rows(p)
-    layout = _layout(p)
+    rows = _rows(p, delimiter)
+    layout = _layout(p, delimiter)
     if not rows:
         raise DataError(f"{str(p)!r} holds no data")
+    how = _hint(p, delimiter, _first_line(p))
     names: list[str] | None = None
     if not all(_is_number(c) or c == "" for c in rows[0][1]):
         names = rows[0][1]
@@ -171,13 +221,13 @@ def load_columns(path: str | os.PathLike[str], columns: Sequence[str | int]) -> 
     width = len(names) if names is not None else len(rows[0][1]) if rows else 0
     if not rows:
         raise DataError(f"{str(p)!r} has a header but no data rows")
-    picked = [_pick(spec, names, width, p) for spec in columns]
+    picked = [_pick(spec, names, width, p, how) for spec in columns]
     out = [np.empty(len(rows)) for _ in picked]
     for r, (line, cells) in enumerate(rows):
         if len(cells) != width:
             raise DataError(
                 f"{str(p)!r} line {line}: {len(cells)} field(s), expected {width} like the "
-                f"{'header' if names is not None else 'first line'} (read as {layout})"
+                f"{'header' if names is not None else 'first line'} ({how})"
             )
         for col, j in zip(out, picked, strict=True):
             cell = cells[j]
@@ -195,12 +245,21 @@ def load_columns(path: str | os.PathLike[str], columns: Sequence[str | int]) -> 
     return tuple(out)
 
 
+def _first_line(path: Path) -> str:
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            return f.readline()
+    except OSError:  # pragma: no cover - read a moment ago
+        return ""
+
+
 def read_xy(
     path: str | os.PathLike[str],
     x: str | int = 0,
     y: str | int = 1,
     *,
     drop_nan: bool = False,
+    delimiter: str | None = None,
 ) -> tuple[F64, F64, int]:
     """Two columns of a data file for identification: finite, at least two rows.
 
@@ -213,6 +272,8 @@ def read_xy(
     drop_nan : bool, default False
         Drop the rows with NaN (or empty cells) in either column; otherwise such
         rows are an error.
+    delimiter : str, optional
+        As for :func:`load_columns`.
 
     Returns
     -------
@@ -227,7 +288,7 @@ def read_xy(
         As :func:`load_columns`; NaN rows without ``drop_nan``; infinite
         values; fewer than two rows.
     """
-    xs, ys = load_columns(path, [x, y])
+    xs, ys = load_columns(path, [x, y], delimiter=delimiter)
     bad = np.isnan(xs) | np.isnan(ys)
     dropped = int(bad.sum())
     where = f"{str(Path(path))!r}"

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._budget import check_memory
 from .._io import atomic_path
 from .._validation import check_array, check_int
 from ..errors import InvalidValueError
@@ -227,6 +228,12 @@ def fit_regression(
     owner = "fit_regression"
     xa, ya = _xy(x, y, owner, ("x", "y"))
     g = check_int(grid, "grid", owner, minimum=2)
+    check_memory(  # the grid, its sums and the estimate, a few copies each
+        8.0 * 8 * g,
+        f"an estimate on {g} grid points",
+        owner,
+        "Use fewer grid points (a few thousand resolve any smooth curve)",
+    )
     points = np.linspace(float(xa.min()), float(xa.max()), g)
     rule = as_rule(bandwidth, "SemiRecursiveKernelRegression")
     est = SemiRecursiveKernelRegression(

@@ -4,7 +4,10 @@
 * :mod:`~flexarm.model.link`, :mod:`~flexarm.model.joints` — link and joint parameters;
 * :mod:`~flexarm.model.arm` — :class:`FlexibleArm`, the NumPy reference of the dynamics;
 * :mod:`~flexarm.model.kinematics`, :mod:`~flexarm.model.lagrangian` — its kinematics and
-  Lagrangian as functions of arrays;
+  Lagrangian as functions of arrays; :mod:`~flexarm.model.foreshortening` — the axial
+  shortening of bent links (geometric stiffening) and its modal integrals;
+* :mod:`~flexarm.model.prescribed` — the arm with its joint motion prescribed;
+* :mod:`~flexarm.model.validity` — what the model choices leave out, measured;
 * :mod:`~flexarm.model.arrays`, :mod:`~flexarm.model.dynamics` — the arm packed as plain
   arrays and the compiled kernels that read them (for your own Numba loops);
 * :mod:`~flexarm.model.plant` — :class:`Plant`, what the simulator reads of an arm.
@@ -20,12 +23,15 @@ _SUBMODULES = (
     "arm",
     "arrays",
     "dynamics",
+    "foreshortening",
     "joints",
     "kinematics",
     "lagrangian",
     "link",
     "modes",
     "plant",
+    "prescribed",
+    "validity",
 )
 _NAMES = {
     "BeamModes": "modes",

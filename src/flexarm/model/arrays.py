@@ -16,6 +16,15 @@ from numpy.typing import NDArray
 from ..errors import InvalidValueError
 
 __all__ = [
+    "AX_BETA",
+    "AX_BETA_MODES",
+    "AX_IALPHA",
+    "AX_Q",
+    "AX_ROWS",
+    "AX_SL",
+    "AX_TIP",
+    "AX_WALPHA",
+    "AX_Y",
     "HUB_MASS",
     "INERTIA",
     "J_A1",
@@ -48,6 +57,16 @@ N_LINK_COLUMNS = 5
 J_A1, J_A2, J_KSW, J_ASW, J_INERTIA, J_DAMPING, J_COUPLED = 0, 1, 2, 3, 4, 5, 6
 J_HAS_FRICTION, J_FRICTION_ON_MOTOR, J_G1 = 7, 8, 9
 N_JOINT_COLUMNS = 15
+# Rows of Workspace.axial (one link's foreshortening terms, by local mode index)
+AX_TIP = 0  # u(L), delta_dot' S(L) delta_dot, (S(L) delta) . delta_dot
+AX_SL = 1  # S(L) delta
+AX_Y = 2  # int rho S delta
+AX_WALPHA = 3  # added to Mb[alpha, delta]
+AX_IALPHA = 4  # [0]: added to Mb[alpha, alpha]
+AX_BETA = 5  # added to beta_ux, beta_uy, beta_alpha
+AX_BETA_MODES = 6  # added to beta_delta
+AX_ROWS = 7
+AX_Q = AX_ROWS  # then K rows of Q, K rows of R, K rows of Q~ (K = n_dof)
 
 
 class ArmArrays(NamedTuple):
@@ -71,6 +90,18 @@ class ArmArrays(NamedTuple):
         Diagonal of the stiffness (N m) and damping (N m s) matrices.
     payload : float array, shape (2,)
         Payload mass (kg) and rotary inertia (kg m**2) at the last link's tip.
+    shortening_tip, shortening_mass, shortening_moment : float arrays, shape (n_dof, n_dof)
+        The foreshortening integrals ``S(L)``, ``int rho S dx`` and
+        ``int rho x S dx`` of :mod:`flexarm.model.foreshortening` within each
+        link's block, zero elsewhere (all zero without geometric stiffening).
+    shortening_cubic : float array, shape (n_dof, K, K)
+        Row ``g`` (a modal coordinate of link ``i``, whose first is ``a0``):
+        ``int rho phi_g S_bc dx`` for link ``i``'s modes ``a0 + b``, ``a0 + c``.
+        ``K`` is the most modes of any link with geometric stiffening, 0
+        without: ``K == 0`` switches every foreshortening term off.
+    shortening_quartic : float array, shape (n_dof, K, K, K)
+        Row ``g``: ``int rho S_ga S_cd dx`` over link ``i``'s modes
+        (``a0 + a``, ``a0 + c``, ``a0 + d``), indexed ``[g, a, c, d]``.
     joint : float array, shape (n_joints, 15)
         Flexible joints (``n_joints`` is 0 for rigid joints or ``n_links``), one
         row each: ``a1, a2, ksw, asw`` of the spring law (a linear joint is
@@ -91,6 +122,11 @@ class ArmArrays(NamedTuple):
     damping: F64
     payload: F64
     joint: F64
+    shortening_tip: F64
+    shortening_mass: F64
+    shortening_moment: F64
+    shortening_cubic: F64
+    shortening_quartic: F64
 
 
 class Workspace(NamedTuple):
@@ -110,6 +146,7 @@ class Workspace(NamedTuple):
     lmass: F64  # (n, n) lower triangle of M, then its LDL' factor, local order
     lbias: F64  # (n,) C(q, dq) dq, then the right-hand side and solution, local order
     inv_diag: F64  # (n,) reciprocal pivots of the LDL' factor
+    axial: F64  # (AX_ROWS + 3 n, max(n, 3)) one link's foreshortening terms (AX_* rows)
 
 
 def make_workspace(n_dof: int) -> Workspace:
@@ -125,6 +162,7 @@ def make_workspace(n_dof: int) -> Workspace:
         lmass=np.zeros((n, n)),
         lbias=np.zeros(n),
         inv_diag=np.zeros(n),
+        axial=np.zeros((AX_ROWS + 3 * n, max(n, 3))),
     )
 
 
@@ -141,9 +179,17 @@ def pack_arm_arrays(
     damping: F64,
     payload: F64,
     joint: F64,
+    shortening_tip: F64 | None = None,
+    shortening_mass: F64 | None = None,
+    shortening_moment: F64 | None = None,
+    shortening_cubic: F64 | None = None,
+    shortening_quartic: F64 | None = None,
 ) -> ArmArrays:
     """The one way to build :class:`ArmArrays`: by keyword, shapes and dtypes checked,
     every array contiguous and read-only.
+
+    The foreshortening arrays default to none (zero, ``K = 0``): the arm without
+    geometric stiffening.
 
     Raises
     ------
@@ -164,7 +210,14 @@ def pack_arm_arrays(
         "stiffness": (n,),
         "damping": (n,),
         "payload": (2,),
+        "shortening_tip": (n, n),
+        "shortening_mass": (n, n),
+        "shortening_moment": (n, n),
     }
+    k = 0 if shortening_cubic is None else int(np.asarray(shortening_cubic).shape[-1])
+    shapes["shortening_cubic"] = (n, k, k)
+    shapes["shortening_quartic"] = (n, k, k, k)
+    none2, none3, none4 = np.zeros((n, n)), np.zeros((n, 0, 0)), np.zeros((n, 0, 0, 0))
     given = {
         "link": link,
         "mass_integral": mass_integral,
@@ -176,6 +229,11 @@ def pack_arm_arrays(
         "damping": damping,
         "payload": payload,
         "joint": joint,
+        "shortening_tip": none2 if shortening_tip is None else shortening_tip,
+        "shortening_mass": none2 if shortening_mass is None else shortening_mass,
+        "shortening_moment": none2 if shortening_moment is None else shortening_moment,
+        "shortening_cubic": none3 if shortening_cubic is None else shortening_cubic,
+        "shortening_quartic": none4 if shortening_quartic is None else shortening_quartic,
     }
     out: dict[str, F64] = {}
     for name, value in given.items():

@@ -25,8 +25,15 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from .._compile import njit_runtime_free
 from .arrays import (
+    AX_BETA,
+    AX_BETA_MODES,
+    AX_IALPHA,
+    AX_Q,
+    AX_SL,
+    AX_TIP,
+    AX_WALPHA,
+    AX_Y,
     HUB_MASS,
     INERTIA,
     J_A1,
@@ -46,6 +53,8 @@ from .arrays import (
     Workspace,
     make_workspace,
 )
+from .dynamics_foreshortening import link_foreshortening
+from .dynamics_points import point_kinematics
 from .dynamics_two_links import (
     accelerations_two_links_one_mode,
     forward_dynamics_two_links_one_mode,
@@ -127,6 +136,7 @@ def _assemble_local(q: F64, dq: F64, model: ArmArrays, ws: Workspace) -> None:  
         for c in range(r + 1):
             M[r, c] = 0.0
     has_joints = jt.shape[0] > 0
+    has_shortening = model.shortening_quartic.shape[1] > 0
     if has_joints:
         M[nq, nq] += jt[0, J_INERTIA]  # first rotor: its carrier is the base
     bx = 0.0  # velocity-dependent acceleration of the joint, link frame
@@ -186,13 +196,20 @@ def _assemble_local(q: F64, dq: F64, model: ArmArrays, ws: Workspace) -> None:  
                 dmd += q[g] * md[g, c] * q[c]
                 dmdd += q[g] * md[g, c] * dq[c]
         ialpha = ia + dmd
+        cxe = cx  # int rho (x - u) dx
+        stiffening = has_shortening and a1 > a0
+        if stiffening:
+            # Foreshortening (flexarm.model.foreshortening) into ws.axial: the link's
+            # body inertia and inertial force gain the terms of u = 1/2 delta' S delta.
+            cxe = link_foreshortening(q, dq, model, a0, a1, cx, ad, bx, by, ws.axial)
+            ialpha += ws.axial[AX_IALPHA, 0]
         # Rows of P = Mb Jb for (u_x, u_y, alpha) over the prefix [0, s], then the
         # lower triangle of Jb' P there; link i's own modes only see their own rows.
         for c in range(s + 1):
             u0, u1, ac = U[0, c], U[1, c], A[c]
             P[0, c] = mass * u0 - vd * ac
-            P[1, c] = mass * u1 + cx * ac
-            P[2, c] = -vd * u0 + cx * u1 + ialpha * ac
+            P[1, c] = mass * u1 + cxe * ac
+            P[2, c] = -vd * u0 + cxe * u1 + ialpha * ac
         for r in range(s + 1):
             u0, u1, ar = U[0, r], U[1, r], A[r]
             for c in range(r + 1):
@@ -210,23 +227,47 @@ def _assemble_local(q: F64, dq: F64, model: ArmArrays, ws: Workspace) -> None:  
                     M[r, s + 1 + c - a0] += mgc
                 acc -= ad2 * mgc * q[c]
             h[r] += acc
+        if stiffening:
+            F = ws.axial
+            for g in range(a0, a1):
+                r = s + 1 + g - a0
+                k = g - a0
+                yg, wg = F[AX_Y, k], F[AX_WALPHA, k]
+                for c in range(s + 1):
+                    M[r, c] += wg * A[c] - yg * U[0, c]
+                for c in range(a0, g + 1):
+                    M[r, s + 1 + c - a0] += F[AX_Q + k, c - a0]
+                h[r] += F[AX_BETA_MODES, k]
         # Body-frame inertial force at qddot = 0.
         beta_ux = mass * bx - ad2 * cx - 2.0 * ad * vdd
         beta_uy = mass * by - ad2 * vd
         beta_al = -bx * vd + 2.0 * ad * dmdd + cx * by
+        if stiffening:
+            beta_ux += ws.axial[AX_BETA, 0]
+            beta_uy += ws.axial[AX_BETA, 1]
+            beta_al += ws.axial[AX_BETA, 2]
         for r in range(s + 1):
             h[r] += U[0, r] * beta_ux + U[1, r] * beta_uy + A[r] * beta_al
         # Tip of link i, still in link i's frame; A becomes the tip's angle gradient.
+        lt = L  # L - u(L)
+        if stiffening:
+            lt = L - ws.axial[AX_TIP, 0]
         for c in range(s + 1):
             U[0, c] -= e * A[c]
-            U[1, c] += L * A[c]
+            U[1, c] += lt * A[c]
         for g in range(a0, a1):
             r = s + 1 + g - a0
             U[0, r] = 0.0
             U[1, r] = tdef[g]
             A[r] = tslope[g]
-        bx += -ad2 * L - 2.0 * ad * ed
+        bx += -ad2 * lt - 2.0 * ad * ed
         by += -ad2 * e
+        if stiffening:
+            F = ws.axial
+            for g in range(a0, a1):
+                U[0, s + 1 + g - a0] = -F[AX_SL, g - a0]
+            bx -= F[AX_TIP, 1]
+            by -= 2.0 * ad * F[AX_TIP, 2]
     # Payload at the last tip: point mass, and rotary inertia turning with the tip slope.
     mp, jp = model.payload[0], model.payload[1]
     if mp != 0.0:
@@ -408,61 +449,3 @@ def forward_dynamics(
         forward_dynamics_two_links_one_mode(q, dq, tau, model, ddq)
     else:
         forward_dynamics_general(q, dq, tau, model, ws, ddq)
-
-
-@njit_runtime_free(cache=True, nogil=True)
-def point_kinematics(
-    q: F64, dq: F64, model: ArmArrays, link: int, distance: float, phi: F64, out: F64
-) -> None:  # pragma: no cover - compiled
-    """Position and velocity of a point on a link, deflection included.
-
-    Parameters
-    ----------
-    q, dq : ndarray, shape (n_dof,)
-    model : ArmArrays
-    link : int
-        0-based link index.
-    distance : float
-        Distance along the undeformed link from its joint, m.
-    phi : ndarray, shape (n_modes of ``link``,)
-        Mode shapes of ``link`` evaluated at ``distance``.
-    out : ndarray, shape (4,)
-        Written: ``x, y`` (m) and ``vx, vy`` (m/s) in the base frame.
-    """
-    ms = model.mode_start
-    alpha = 0.0
-    alpha_dot = 0.0
-    px = 0.0
-    py = 0.0
-    vx = 0.0
-    vy = 0.0
-    for i in range(link + 1):
-        alpha += q[i]
-        alpha_dot += dq[i]
-        a0, a1 = ms[i], ms[i + 1]
-        w = 0.0
-        wd = 0.0
-        if i < link:
-            x = model.link[i, LEN]
-            for r in range(a0, a1):
-                w += model.tip_deflection[r] * q[r]
-                wd += model.tip_deflection[r] * dq[r]
-        else:
-            x = distance
-            for r in range(a0, a1):
-                w += phi[r - a0] * q[r]
-                wd += phi[r - a0] * dq[r]
-        c, s = np.cos(alpha), np.sin(alpha)
-        px += c * x - s * w
-        py += s * x + c * w
-        # d/dt R(alpha) [x, w] = alpha_dot R S [x, w] + R [0, wd],  S = [[0, -1], [1, 0]]
-        vx += alpha_dot * (-c * w - s * x) - s * wd
-        vy += alpha_dot * (-s * w + c * x) + c * wd
-        if i < link:
-            for r in range(a0, a1):
-                alpha += model.tip_slope[r] * q[r]
-                alpha_dot += model.tip_slope[r] * dq[r]
-    out[0] = px
-    out[1] = py
-    out[2] = vx
-    out[3] = vy

@@ -27,10 +27,16 @@ F64 = NDArray[np.float64]
 @nb.njit(cache=True, nogil=True, inline="always")
 def is_two_links_one_mode(model: ArmArrays) -> bool:  # pragma: no cover - compiled
     """Whether :func:`forward_dynamics_two_links_one_mode` applies: two links with
-    one mode each (``q = (theta1, theta2, delta1, delta2)``) and rigid joints."""
+    one mode each (``q = (theta1, theta2, delta1, delta2)``), rigid joints and no
+    geometric stiffening."""
     ms = model.mode_start
     return bool(
-        model.joint.shape[0] == 0 and ms.shape[0] == 3 and ms[0] == 2 and ms[1] == 3 and ms[2] == 4
+        model.joint.shape[0] == 0
+        and model.shortening_quartic.shape[1] == 0
+        and ms.shape[0] == 3
+        and ms[0] == 2
+        and ms[1] == 3
+        and ms[2] == 4
     )
 
 

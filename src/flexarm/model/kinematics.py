@@ -21,10 +21,12 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._validation import check_array, check_option
 from ..errors import InvalidValueError
 from .arrays import LEN, ArmArrays
 
 __all__ = [
+    "RigidKinematics",
     "deflected_point",
     "lever_lengths",
     "rigid_jacobian",
@@ -127,13 +129,21 @@ def two_link_inverse_kinematics(l1: float, l2: float, position: F64, elbow: str,
     return np.stack([t1, t2], axis=-1)
 
 
-def deflected_point(arrays: ArmArrays, phi: F64, q: F64, link: int, distance: float) -> F64:
+def deflected_point(
+    arrays: ArmArrays,
+    phi: F64,
+    q: F64,
+    link: int,
+    distance: float,
+    shortening: F64 | None = None,
+) -> F64:
     """Position of the point ``distance`` along ``link`` with the links' deflection.
 
     Parameters
     ----------
     arrays : ArmArrays
-        The packed arm (link lengths, tip deflections and slopes of the modes).
+        The packed arm (link lengths, tip deflections and slopes of the modes,
+        foreshortening at the tips).
     phi : ndarray, shape (n_modes of ``link``,)
         ``link``'s mode shapes at ``distance``.
     q : ndarray, shape (m, n_dof)
@@ -142,24 +152,117 @@ def deflected_point(arrays: ArmArrays, phi: F64, q: F64, link: int, distance: fl
         0-based link index.
     distance : float
         Distance along the undeformed link from its joint, m.
+    shortening : ndarray, shape (n_modes of ``link``, n_modes of ``link``), optional
+        ``S(distance)`` (:func:`flexarm.model.foreshortening.shortening_matrix`):
+        the point's own foreshortening with geometric stiffening.
 
     Returns
     -------
     ndarray, shape (m, 2)
         ``(x, y)`` in m, base frame. Joint ``i`` turns link ``i`` relative to the
-        deflected tip of link ``i - 1``: the tip slopes add to the angles.
+        deflected tip of link ``i - 1``: the tip slopes add to the angles. With
+        geometric stiffening (``arrays`` holds the foreshortening) a point at
+        ``x`` along a link sits at ``x - u(x)`` along its clamped axis.
     """
     ms = arrays.mode_start
+    stiff = arrays.shortening_quartic.shape[1] > 0
     pos = np.zeros((q.shape[0], 2))
     alpha = np.zeros(q.shape[0])
     for i in range(link + 1):
         s = slice(int(ms[i]), int(ms[i + 1]))
         alpha = alpha + q[:, i]
+        d = q[:, s]
         if i < link:
-            x, w = arrays.link[i, LEN], q[:, s] @ arrays.tip_deflection[s]
+            x, w = arrays.link[i, LEN], d @ arrays.tip_deflection[s]
+            S = arrays.shortening_tip[s, s]
         else:
-            x, w = distance, q[:, s] @ phi
+            x, w = distance, d @ phi
+            S = shortening if shortening is not None else np.zeros((d.shape[1],) * 2)
+        if stiff:
+            x = x - 0.5 * np.einsum("mj,jk,mk->m", d, S, d)
         c, sn = np.cos(alpha), np.sin(alpha)
         pos += np.column_stack([x * c - w * sn, x * sn + w * c])
-        alpha = alpha + q[:, s] @ arrays.tip_slope[s]
+        alpha = alpha + d @ arrays.tip_slope[s]
     return pos
+
+
+class RigidKinematics:
+    """The rigid-link kinematics of an arm from its link lengths: what encoders
+    imply and the paper's controllers use (eqs. 9–10). A base of
+    :class:`flexarm.FlexibleArm`, which supplies ``n_links`` and ``link_lengths``."""
+
+    _owner = "FlexibleArm"
+
+    @property
+    def n_links(self) -> int:
+        raise NotImplementedError
+
+    @property
+    def link_lengths(self) -> F64:
+        """Link lengths, m, shape ``(n_links,)``."""
+        raise NotImplementedError
+
+    def _check_theta(self, theta: ArrayLike) -> NDArray[np.float64]:
+        arr = check_array(theta, "theta", self._owner)
+        if arr.ndim not in (1, 2) or arr.shape[-1] != self.n_links:
+            raise InvalidValueError(
+                f"The 'theta' parameter of {self._owner} must be of shape ({self.n_links},) or "
+                f"(m, {self.n_links}). Got shape {arr.shape} instead."
+            )
+        return arr
+
+    def forward_kinematics(self, theta: ArrayLike) -> NDArray[np.float64]:
+        """Rigid-link tip position from joint angles (deflections ignored).
+
+        Parameters
+        ----------
+        theta : array_like, shape (n_links,) or (m, n_links)
+            Joint angles, rad.
+
+        Returns
+        -------
+        ndarray, shape (2,) or (m, 2)
+            ``x = sum L_i cos(theta_1 + ... + theta_i)``, likewise ``y``; m.
+        """
+        return rigid_point(self.link_lengths, self._check_theta(theta))[0]
+
+    def jacobian(self, theta: ArrayLike) -> NDArray[np.float64]:
+        """Rigid-link Jacobian ``d(x, y)/d theta``, shape ``(2, n_links)`` or
+        ``(m, 2, n_links)``, m/rad."""
+        return rigid_jacobian(self.link_lengths, self._check_theta(theta))
+
+    def inverse_kinematics(
+        self, position: ArrayLike, elbow: str = "positive"
+    ) -> NDArray[np.float64]:
+        """Joint angles of a two-link arm (rigid links) that put the tip at ``position``.
+
+        Parameters
+        ----------
+        position : array_like, shape (2,) or (m, 2)
+            Target ``(x, y)`` in m.
+        elbow : {"positive", "negative"}
+            The branch: the sign of ``theta_2``.
+
+        Returns
+        -------
+        ndarray, shape (2,) or (m, 2)
+            ``(theta_1, theta_2)`` in rad, ``theta_2`` in ``[0, pi]`` or ``[-pi, 0]``.
+
+        Raises
+        ------
+        ValueError
+            If the arm does not have two links or a target is out of reach.
+        """
+        if self.n_links != 2:
+            raise InvalidValueError(
+                f"inverse_kinematics needs a two-link arm. Got {self.n_links} links instead."
+            )
+        check_option(elbow, "elbow", self._owner, ("positive", "negative"))
+        p = check_array(position, "position", self._owner)
+        if p.ndim not in (1, 2) or p.shape[-1] != 2:
+            raise InvalidValueError(
+                f"The 'position' parameter of {self._owner} must be of shape (2,) or (m, 2). "
+                f"Got shape {p.shape} instead."
+            )
+        l1, l2 = float(self.link_lengths[0]), float(self.link_lengths[1])
+        return two_link_inverse_kinematics(l1, l2, p, elbow, self._owner)

@@ -22,7 +22,12 @@ class Link:
     linear_density : float
         ``rho`` in kg/m (> 0).
     n_modes : int
-        Assumed modes kept (>= 0); 0 makes the link a rigid uniform rod.
+        Assumed modes kept (>= 0); 0 makes the link a rigid uniform rod. The
+        default, 3, is where a two-link arm with clamped-mass modes and geometric
+        stiffening converges: against a geometrically exact reference (Exudyn's
+        ANCF cables) its link tip deflections are within 0.2 % of their peak
+        under torque pulses and on a prescribed square, where one mode is up to 45 %
+        off and two modes up to 1 % (README, "How many modes").
     hub_mass : float
         Mass of the hub at this link's joint, in kg (>= 0). The hub sits at the
         previous link's tip, which carries it; the first link's hub sits on the
@@ -44,7 +49,7 @@ class Link:
     length: float
     flexural_rigidity: float
     linear_density: float
-    n_modes: int = 1
+    n_modes: int = 3
     hub_mass: float = 0.0
     hub_inertia: float = 0.0
     modal_damping: float = 0.0

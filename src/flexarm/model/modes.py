@@ -60,6 +60,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._budget import check_memory, check_time
 from .._validation import (
     check_array,
     check_int,
@@ -250,6 +251,27 @@ def _shape_coefficients(lam: NDArray[np.float64], mu: float, jr: float) -> NDArr
     return np.stack([a, b, c, d]) * sign
 
 
+def _quadrature_points(roots: NDArray[np.float64]) -> int:
+    """Gauss–Legendre points exact enough for modes up to the largest root."""
+    lam_max = float(roots[-1]) if roots.shape[0] else 0.0
+    return 64 + 2 * math.ceil(lam_max)
+
+
+def _check_scales(length: float, rigidity: float, density: float, owner: str) -> None:
+    """The beam's scales ``rho L**3`` and ``EI / (rho L**4)`` must be float64 numbers."""
+    try:
+        scales = (density * length**3, rigidity / (density * length**4))
+    except (OverflowError, ZeroDivisionError):
+        scales = (math.inf, math.inf)
+    if not all(math.isfinite(v) and v > 0.0 for v in scales):
+        raise InvalidValueError(
+            f"The 'length', 'flexural_rigidity' and 'linear_density' parameters of {owner} "
+            "must give a beam whose scales rho L**3 and EI / (rho L**4) are finite, "
+            f"positive float64 numbers (at most 1.8e308). Got L = {length!r} m, "
+            f"EI = {rigidity!r} N m**2, rho = {density!r} kg/m instead."
+        )
+
+
 @dataclass(frozen=True, eq=True)
 class BeamModes:
     """Assumed modes of a uniform Euler–Bernoulli beam, clamped at ``x = 0``.
@@ -317,6 +339,14 @@ class BeamModes:
         set_(self, "n_modes", check_int(self.n_modes, "n_modes", owner, minimum=0))
         check_option(self.normalization, "normalization", owner, NORMALIZATIONS)
         set_(self, "amplitude", check_real(self.amplitude, "amplitude", owner, positive=True))
+        _check_scales(self.length, self.flexural_rigidity, self.linear_density, owner)
+        # the quadrature evaluates every mode at ~2 pi n points: refuse what cannot fit
+        n = self.n_modes
+        npts = 64 + 2 * math.ceil(math.pi * (n + 1))
+        what = f"{n} modes of one beam ({npts} quadrature points)"
+        remedy = "Use fewer modes (a handful converge for the arm's motion)"
+        check_memory(8.0 * 4 * npts * max(n, 1), what, owner, remedy)
+        check_time(1e-6 * npts * n, what, owner, remedy)  # ~1 us a mode and point here
         lam = clamped_mass_roots(self.n_modes, self.mass_ratio, self.inertia_ratio)
         coef = _shape_coefficients(lam, self.mass_ratio, self.inertia_ratio)
         self._cache["roots"] = _frozen(lam)
@@ -431,9 +461,9 @@ class BeamModes:
     def _quadrature(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Gauss–Legendre nodes and weights on ``[0, L]`` exact for these modes."""
         if "quad" not in self._cache:
-            lam_max = float(self.roots[-1]) if self.n_modes else 0.0
-            npts = 64 + 2 * math.ceil(lam_max)
-            t, w = np.polynomial.legendre.leggauss(npts)
+            from scipy.special import roots_legendre  # O(npts), for any number of modes
+
+            t, w = roots_legendre(_quadrature_points(self.roots))
             L = self.length
             self._cache["quad"] = (_frozen(0.5 * L * (t + 1.0)), _frozen(0.5 * L * w))
         return self._cache["quad"]  # type: ignore[no-any-return]

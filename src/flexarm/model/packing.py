@@ -6,6 +6,7 @@ from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .arrays import (
     J_A1,
@@ -21,11 +22,14 @@ from .arrays import (
     ArmArrays,
     pack_arm_arrays,
 )
+from .foreshortening import foreshortening_integrals
 from .joints import LinearJoint, NonlinearJoint
 from .link import Link
 from .modes import BeamModes
 
 __all__ = ["PackableArm", "outboard_loads", "pack"]
+
+F64 = NDArray[np.float64]
 
 
 class PackableArm(Protocol):
@@ -46,11 +50,15 @@ class PackableArm(Protocol):
     @property
     def joint_friction(self) -> str: ...
     @property
+    def geometric_stiffening(self) -> bool: ...
+    @property
     def modes(self) -> tuple[BeamModes, ...]: ...
     @property
     def n_dof(self) -> int: ...
     @property
     def n_links(self) -> int: ...
+    @property
+    def n_modes(self) -> tuple[int, ...]: ...
 
 
 def outboard_loads(arm: PackableArm) -> list[tuple[float, float]]:
@@ -108,6 +116,7 @@ def pack(arm: PackableArm) -> ArmArrays:
             row[J_HAS_FRICTION] = 1.0
             row[J_FRICTION_ON_MOTOR] = float(arm.joint_friction == "motor")
             row[J_G1:] = jt.friction.params
+    shortening = _pack_foreshortening(arm, start) if arm.geometric_stiffening else {}
     return pack_arm_arrays(
         mode_start=start,
         link=link,
@@ -120,4 +129,29 @@ def pack(arm: PackableArm) -> ArmArrays:
         damping=d,
         payload=np.array([arm.payload_mass, arm.payload_inertia]),
         joint=joint,
+        **shortening,
     )
+
+
+def _pack_foreshortening(arm: PackableArm, start: NDArray[np.int64]) -> dict[str, F64]:
+    """The foreshortening integrals of every link, in the layout of :class:`ArmArrays`."""
+    n = arm.n_dof
+    k = max(arm.n_modes) if arm.n_modes else 0
+    tip, mass, moment = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+    cubic, quartic = np.zeros((n, k, k)), np.zeros((n, k, k, k))
+    for i, bm in enumerate(arm.modes):
+        a0, a1 = int(start[i]), int(start[i + 1])
+        if a1 == a0:
+            continue
+        f = foreshortening_integrals(bm)
+        s, m = slice(a0, a1), a1 - a0
+        tip[s, s], mass[s, s], moment[s, s] = f.tip, f.mass, f.moment
+        cubic[s, :m, :m] = f.cubic
+        quartic[s, :m, :m, :m] = f.quartic
+    return {
+        "shortening_tip": tip,
+        "shortening_mass": mass,
+        "shortening_moment": moment,
+        "shortening_cubic": cubic,
+        "shortening_quartic": quartic,
+    }

@@ -164,7 +164,11 @@ class PointSensor:
                 f"The 'distance' parameter of PointSensor must be <= {length} m (link "
                 f"{self.link}'s length). Got {self.distance} instead."
             )
-        phi = np.ascontiguousarray(arm.modes[self.link].shape(self.distance)[:, 0])
+        basis = getattr(arm, "point_basis", None)  # shapes, and S(distance) with stiffening
+        if basis is not None:
+            phi = np.ascontiguousarray(basis(self.link, self.distance), dtype=np.float64)
+        else:
+            phi = np.ascontiguousarray(arm.modes[self.link].shape(self.distance)[:, 0])
         return self.link, self.distance, phi
 
     def describe(self, arm: Plant) -> str:

@@ -57,7 +57,8 @@ class SensorArrays(NamedTuple):
     rigid: int64 (1,) — 1: the point is the rigid kinematics of the encoder
         angles (the paper's sensor model), 0: the deflected point.
     distance: (1,) — distance of the point along its link, m.
-    phi: (n_modes of link,) — mode shapes at the point.
+    phi: (n_modes of link,) — mode shapes at the point (then, with geometric stiffening,
+         the link's shortening matrix there: FlexibleArm.point_basis).
     levers: (n_links,) — lever lengths of the rigid kinematics of the encoder
         angles (the link lengths for the joint encoders, the point's for the
         paper's model), m.
@@ -104,7 +105,7 @@ def sensor_arrays(
         The point is the rigid kinematics of the encoder angles (``levers``).
     distance : float
         Distance of the point along its link, m (0 for the encoders).
-    phi : ndarray, shape (n_modes of link,)
+    phi : ndarray, shape (n_modes of link,) or (n_modes + n_modes**2,)
         Mode shapes at the point (empty for the encoders).
     levers : ndarray, shape (n_links,)
         Lever lengths of the rigid kinematics of the encoder angles, m.

@@ -26,6 +26,7 @@ from . import metrics as _m
 
 if TYPE_CHECKING:
     import pandas as pd
+    from matplotlib.animation import FuncAnimation
     from matplotlib.figure import Figure
 
 __all__ = ["RESULT_FILES", "SimulationError", "SimulationResult", "assemble_result"]
@@ -47,6 +48,9 @@ _ARRAYS = (
     "mode_start",
     "link_lengths",
 )
+_OPTIONAL_ARRAYS = ("tip_slope_gains", "mode_shape_samples")  # absent from older files
+_SHAPE_POINTS = 21
+"""Points per link at which :func:`assemble_result` samples the mode shapes."""
 _FORMAT = "flexarm-simulation-result"
 _VERSION = 1
 
@@ -74,6 +78,12 @@ class SimulationResult:
         True end-effector position with deflection, m.
     info : dict
         Settings and run data (JSON-able).
+    tip_slope_gains : ndarray, shape (n_dof,), optional
+        Slope of each mode at its link's tip (0 at the other coordinates).
+    mode_shape_samples : ndarray, shape (n_dof, S), optional
+        Each mode's shape at ``S`` evenly spaced points from its link's joint
+        to its tip (0 at the other coordinates): the deflected links that
+        :meth:`animate` draws. Results saved by older versions have neither.
 
     A run driven open loop (:func:`flexarm.simulate_open_loop`) has no
     reference and no measurement (``reference`` and ``measurement`` have no
@@ -93,6 +103,8 @@ class SimulationResult:
     mode_start: NDArray[np.int64]
     link_lengths: F64
     info: dict[str, JSONValue] = field(default_factory=dict)
+    tip_slope_gains: F64 | None = None
+    mode_shape_samples: F64 | None = None
 
     # ----------------------------------------------------------- derived series
     @property
@@ -173,6 +185,8 @@ class SimulationResult:
             mode_start=self.mode_start,
             link_lengths=self.link_lengths,
             info=dict(self.info),
+            tip_slope_gains=self.tip_slope_gains,
+            mode_shape_samples=self.mode_shape_samples,
         )
 
     # ------------------------------------------------------------------ export
@@ -230,6 +244,7 @@ class SimulationResult:
             "info": self.info,
         }
         arrays = {k: getattr(self, k) for k in _ARRAYS}
+        arrays |= {k: getattr(self, k) for k in _OPTIONAL_ARRAYS if getattr(self, k) is not None}
         with atomic_path(path) as tmp, open(tmp, "wb") as fh:
             np.savez_compressed(fh, meta=np.array(json.dumps(meta)), **arrays)
         return path
@@ -242,6 +257,7 @@ class SimulationResult:
             with np.load(path, allow_pickle=False) as data:
                 meta = json.loads(str(data["meta"]))
                 arrays = {k: np.array(data[k]) for k in _ARRAYS}
+                arrays |= {k: np.array(data[k]) for k in _OPTIONAL_ARRAYS if k in data.files}
         except FileNotFoundError:
             raise
         except Exception as exc:
@@ -269,6 +285,15 @@ class SimulationResult:
         return out
 
     # ------------------------------------------------------------------ plots
+    def animate(
+        self, *, fps: float = 25.0, speed: float = 1.0, fig: Figure | None = None
+    ) -> FuncAnimation:
+        """The deflected arm moving (Matplotlib ``FuncAnimation``; never shown):
+        :func:`flexarm.sim.animation.animate`, whose parameters these are."""
+        from .animation import animate
+
+        return animate(self, fps=fps, speed=speed, fig=fig)
+
     def plot(self, fig: Figure | None = None) -> Figure:
         """Three panels: the XY path against the desired one, the error, the link
         deflections.
@@ -420,6 +445,8 @@ def assemble_result(
         mode_start=np.asarray(arm.arrays.mode_start),
         link_lengths=np.asarray(arm.link_lengths, dtype=float),
         info=info,
+        tip_slope_gains=np.asarray(arm.arrays.tip_slope, dtype=float),
+        mode_shape_samples=_mode_shape_samples(arm),
     )
     if diverged:
         tk = float(t[last_row])
@@ -433,3 +460,18 @@ def assemble_result(
             result.truncated(last_row + 1),
         )
     return result
+
+
+def _mode_shape_samples(arm: ResultArm) -> F64 | None:
+    """Each mode's shape at :data:`_SHAPE_POINTS` points along its link, shape
+    (n_dof, S); None for a plant without ``modes``."""
+    modes = getattr(arm, "modes", None)
+    if modes is None:
+        return None
+    ms = np.asarray(arm.arrays.mode_start)
+    out = np.zeros((arm.arrays.tip_slope.shape[0], _SHAPE_POINTS))
+    for i, length in enumerate(np.asarray(arm.link_lengths, dtype=float)):
+        if ms[i + 1] > ms[i]:
+            x = np.linspace(0.0, length, _SHAPE_POINTS)
+            out[ms[i] : ms[i + 1]] = np.asarray(modes[i].shape(x), dtype=float)
+    return out

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..control.adaptive import FuzzyAdaptiveJTPD
 from ..control.controllers import Controller, JacobianTransposePD, JointPD
+from ..control.custom import call_factory, is_factory_spec, load_factory
 from ..control.lqg import LQG
 from ..control.reflected import ReflectedTipPD
 from ..control.shapers import Shaper, design, for_modes
@@ -75,6 +76,7 @@ _ARM_PASSTHROUGH = (
     "mode_amplitude",
     "joint_friction",
     "rotor_coupling",
+    "geometric_stiffening",
 )
 _ARM_KEYS = ("preset", "n_modes", "links", "joints", *_ARM_PASSTHROUGH)
 
@@ -340,6 +342,8 @@ def _controller(
     r: ScenarioReader, data: Mapping[str, Any], arm: FlexibleArm
 ) -> tuple[Controller, dict[str, Any]]:
     t = r.table(data, "controller")
+    if is_factory_spec(t.get("kind")):  # your own: "module:factory"
+        return _factory_controller(r, t, arm)
     kind = r.kind(t, "controller", CONTROLLERS)
     controller: Any
     description: dict[str, Any] = {"kind": kind}
@@ -375,6 +379,21 @@ def _controller(
             controller.parameters(arm)  # the gains are checked against the arm here
     description.update(kp=controller.kp, kd=controller.kd)
     return controller, description
+
+
+def _factory_controller(
+    r: ScenarioReader, t: Mapping[str, Any], arm: FlexibleArm
+) -> tuple[Controller, dict[str, Any]]:
+    """kind = "module:factory": ``factory(arm, **other keys)``, the module found on
+    ``sys.path``, beside the scenario file or in the current directory."""
+    spec = str(t["kind"])
+    params = {k: v for k, v in t.items() if k != "kind"}
+    here = [os.path.dirname(os.path.abspath(r.source))] if os.path.isfile(r.source) else []
+    with r.library("controller.kind"):
+        factory = load_factory(spec, search=[*here, os.getcwd()])
+    with r.library("controller", params):
+        controller = call_factory(factory, spec, arm, params)
+    return controller, {"kind": spec, "name": controller.name, **params}
 
 
 _LQG_KEYS = (

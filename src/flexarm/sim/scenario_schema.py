@@ -17,16 +17,17 @@ builds, with the same names and SI units::
     preset = "paper"          # two 4.5 m links (FlexibleArm.paper); or omit it and
                               # give [[arm.links]] instead (not both)
     n_modes = 1               # modes per link of the preset only
-    boundary = "clamped-free" # or "clamped-mass"
+    boundary = "clamped-free" # or "clamped-mass" (default with [[arm.links]])
     payload_mass = 0.0        # kg
     payload_inertia = 0.0     # kg m^2
-    # also: mode_normalization, mode_amplitude, joint_friction, rotor_coupling
+    # also: mode_normalization, mode_amplitude, joint_friction, rotor_coupling,
+    # geometric_stiffening (false for the preset, true with [[arm.links]])
 
     # [[arm.links]]           # one table per link, base outwards (Link)
     # length = 4.5            # m            (required)
     # flexural_rigidity = 1676.0   # N m^2   (required)
     # linear_density = 0.335  # kg/m         (required)
-    # n_modes = 1, hub_mass = 0.0 (kg), hub_inertia = 0.0 (kg m^2), modal_damping = 0.0
+    # n_modes = 3, hub_mass = 0.0 (kg), hub_inertia = 0.0 (kg m^2), modal_damping = 0.0
 
     # [arm.joints]            # the same joint at every link (default: rigid joints)
     # kind = "linear"         # "rigid" | "linear" (LinearJoint.default()) |
@@ -63,7 +64,11 @@ builds, with the same names and SI units::
                               #   zeta = 0.707, ks = 1.0, law = "scaled" | "damping");
                               # "lqg": observer-based LQG from the sensor alone (keys: the
                               #   LQG parameters, model_modes, model_boundary);
-                              # "reflected": PD on the reflected output (alpha, zeta)
+                              # "reflected": PD on the reflected output (alpha, zeta);
+                              # "module:factory": your own, factory(arm, **the other
+                              #   keys) returning a Controller (flexarm.control.custom;
+                              #   module beside this file, in the current directory or
+                              #   on sys.path; examples/my_controller.py)
 
     [delay]                   # transport delay of the sensed signal
     delay = 0.0               # s, or "seed" / "dispersive" (below)
@@ -90,6 +95,7 @@ builds, with the same names and SI units::
     # smoothing = 0.1         # s: zero-phase smoothing of the reference path (preview)
     # feedforward = true      # rigid inverse dynamics (default: the controller's choice)
     # check_sampling = true   # refuse a period beyond the sampled loop's bound
+    # record_every = 1        # record every k-th control instant (and the last)
 
 ``delay = "seed"`` or ``"dispersive"`` computes the wave-travel delay
 (:func:`flexarm.sensing.delays.travel_delay`) over the path length along the links
@@ -276,6 +282,8 @@ def read_scenario(path: str | os.PathLike[str]) -> dict[str, Any]:
             return tomllib.load(fh)
     except FileNotFoundError:
         raise ScenarioError(source, None, "no such file") from None
+    except IsADirectoryError:
+        raise ScenarioError(source, None, "a directory, not a scenario file") from None
     except OSError as exc:
         raise ScenarioError(source, None, f"cannot read the file: {exc.strerror or exc}") from None
     except tomllib.TOMLDecodeError as exc:

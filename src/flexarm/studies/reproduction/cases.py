@@ -21,6 +21,7 @@ __all__ = [
     "ADAPTATION_LAWS",
     "CONTROLLER_KINDS",
     "CONTROLLER_LABELS",
+    "CONVERGED_ARM_TABLE",
     "DEFAULT_DT",
     "DEFAULT_KS",
     "DEFAULT_KS_RANGE",
@@ -73,6 +74,17 @@ Metrics = Mapping[str, float | Sequence[float] | None]
 Row = dict[str, str | float | None]
 """One row of the study's table, units in the column names."""
 
+CONVERGED_ARM_TABLE: dict[str, JSONValue] = {
+    "preset": "paper",
+    "n_modes": 3,
+    "boundary": "clamped-mass",
+    "geometric_stiffening": True,
+}
+"""The converged arm in the scenario schema: the paper's links with three
+clamped-mass modes each and geometric stiffening (within 0.02 mm of a
+geometrically exact reference's 63 mm peak on the square;
+:mod:`flexarm.model.validity`)."""
+
 CONTROLLER_LABELS = {"pd": "nonadaptive PD", "fuzzy": "fuzzy adaptive"}
 MODEL_LABELS = {"paper": "the paper's sensor model", "physical": "the physical sensor model"}
 SENSOR_LABELS = {"joint": "joint", "tip": "end effector", "point:1:0.5": "0.5 m from elbow"}
@@ -95,6 +107,10 @@ class Case:
         The paper's sensor model (its delays realised as 2nd-order Padé with the
         reference delayed, as the paper did), or the deflected point (delays
         exact, the reference not delayed). The encoders are the same in both.
+    arm : {"paper", "converged"}
+        The paper's model of the arm, or the converged one (three clamped-mass
+        modes per link, geometric stiffening:
+        :data:`flexarm.studies.reproduction.converged.CONVERGED_ARM`).
     """
 
     controller: str
@@ -103,6 +119,7 @@ class Case:
     ks: float = DEFAULT_KS
     law: str = DEFAULT_LAW
     sensor_model: str = "paper"
+    arm: str = "paper"
 
     def key(self) -> tuple[str | float, ...]:
         """Identity of the run (the fuzzy settings do not matter for "pd", the sensor
@@ -110,8 +127,8 @@ class Case:
         model = "encoders" if self.sensor == "joint" else self.sensor_model
         delay = "none" if self.sensor == "joint" else self.delay
         if self.controller == "pd":
-            return ("pd", self.sensor, model, delay)
-        return (self.controller, self.sensor, model, delay, self.ks, self.law)
+            return ("pd", self.sensor, model, delay, self.arm)
+        return (self.controller, self.sensor, model, delay, self.ks, self.law, self.arm)
 
     def scenario_dict(self, duration: float | None, dt: float) -> dict[str, JSONValue]:
         """The case in the scenario-file schema (:mod:`flexarm.sim.scenario`).
@@ -144,6 +161,8 @@ class Case:
             "controller": controller,
             "simulation": simulation,
         }
+        if self.arm == "converged":
+            data["arm"] = dict(CONVERGED_ARM_TABLE)
         if self.delay != "none":
             delay: dict[str, JSONValue] = {"delay": self.delay}
             if self.sensor_model == "paper":
@@ -161,6 +180,8 @@ class Case:
             text += f" (ks = {self.ks:g}, {self.law})"
         if self.delay != "none":
             text += f", {self.delay} delay"
+        if self.arm == "converged":
+            text += ", converged arm"
         return text
 
 

@@ -68,6 +68,8 @@ class RunMatrix:
     matrix: tuple[Case, ...]
     delay_study: tuple[Case, ...] = ()
     ks_study: tuple[Case, ...] = ()
+    converged: tuple[Case, ...] = ()
+    converged_dt: float | None = None
 
     @classmethod
     def build(
@@ -78,6 +80,7 @@ class RunMatrix:
         ks_range: Sequence[float] = (),
         laws: Sequence[str] = (),
         delays: Sequence[str] = (),
+        converged_dt: float | None = None,
     ) -> RunMatrix:
         """The matrix with the fuzzy law ``(ks, law)``, and the sensitivity study.
 
@@ -91,6 +94,9 @@ class RunMatrix:
             The ``ks`` study: every law at every ``ks`` (empty: none).
         delays : sequence of {"none", "seed", "dispersive"}
             The delay study: the matrix under each delay model (empty: none).
+        converged_dt : float, optional
+            Also the matrix on the converged arm, at this control period (s;
+            None: not).
         """
         matrix = tuple(
             Case(c, s, _MODEL_DELAY[m], ks, law, m)
@@ -111,21 +117,32 @@ class RunMatrix:
             for k in ks_range
             for s in SENSOR_CASES
         )
-        return cls(matrix, delay_study, ks_study)
+        converged = (
+            tuple(dataclasses.replace(c, arm="converged") for c in matrix)
+            if converged_dt is not None
+            else ()
+        )
+        return cls(matrix, delay_study, ks_study, converged, converged_dt)
 
     def unique(self) -> dict[tuple[str | float, ...], Case]:
         """The distinct runs by :meth:`Case.key`, first occurrence first."""
         unique: dict[tuple[str | float, ...], Case] = {}
-        for c in (*self.matrix, *self.delay_study, *self.ks_study):
+        for c in (*self.matrix, *self.delay_study, *self.ks_study, *self.converged):
             unique.setdefault(c.key(), c)
         return unique
+
+    def period(self, case: Case, dt: float) -> float:
+        """The control period of ``case``: ``dt``, or the converged arm's own."""
+        if case.arm == "converged" and self.converged_dt is not None:
+            return self.converged_dt
+        return dt
 
     def validate(self, duration: float | None, dt: float, workers: int = 1) -> None:
         """Build every run's scenario and check what the runs need (memory, time), so
         that bad settings fail before the first run."""
         unique = self.unique().values()
         for c in unique:
-            sc = Scenario.from_dict(c.scenario_dict(duration, dt), source=_SOURCE)
+            sc = Scenario.from_dict(c.scenario_dict(duration, self.period(c, dt)), source=_SOURCE)
             check_budget(
                 sc.arm,
                 sc.sensor,
@@ -147,7 +164,7 @@ class RunMatrix:
         *,
         workers: int = 1,
         progress: Progress | None = None,
-    ) -> tuple[list[CaseResult], list[CaseResult], list[CaseResult]]:
+    ) -> tuple[list[CaseResult], list[CaseResult], list[CaseResult], list[CaseResult]]:
         """Run every distinct case once, on ``workers`` cores
         (:func:`flexarm.sim.batch.iter_simulations`).
 
@@ -164,13 +181,13 @@ class RunMatrix:
 
         Returns
         -------
-        matrix, delay_study, ks_study : list of CaseResult
+        matrix, delay_study, ks_study, converged : list of CaseResult
             In the order of the attributes; a run shared by several cases is
             the same result, relabelled with each case.
         """
         unique = list(self.unique().items())
         scenarios = [
-            Scenario.from_dict(case.scenario_dict(duration, dt), source=_SOURCE)
+            Scenario.from_dict(case.scenario_dict(duration, self.period(case, dt)), source=_SOURCE)
             for _, case in unique
         ]
         runs = [{"arm": sc.arm, **sc.simulate_kwargs(), "progress": False} for sc in scenarios]
@@ -191,7 +208,12 @@ class RunMatrix:
                 out.append(r)
             return out
 
-        return pick(self.matrix), pick(self.delay_study), pick(self.ks_study)
+        return (
+            pick(self.matrix),
+            pick(self.delay_study),
+            pick(self.ks_study),
+            pick(self.converged),
+        )
 
 
 def run_case(case: Case, duration: float | None, dt: float) -> CaseResult:

@@ -38,6 +38,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from .beyond import Beyond
+    from .converged import Converged
 
 __all__ = ["FIGURE_SIZE", "OUTPUT_FILES", "VOCABULARY", "Reproduction", "Settings"]
 
@@ -120,6 +121,8 @@ class Reproduction:
         The study's parameters (units in the keys).
     beyond : Beyond or None
         The study beyond the paper (None when not run).
+    converged : Converged or None
+        The matrix on a converged arm and its verdicts (None when not run).
     """
 
     cases: list[CaseResult]
@@ -128,6 +131,7 @@ class Reproduction:
     claims: list[Claim]
     settings: Settings
     beyond: Beyond | None = None
+    converged: Converged | None = None
 
     def summary(self) -> dict[str, JSONValue]:
         """The JSON summary (what ``flexarm reproduce --json`` prints)."""
@@ -141,6 +145,7 @@ class Reproduction:
                 },
                 "settings": self.settings,
                 "beyond": None if self.beyond is None else self.beyond.summary(),
+                "converged": None if self.converged is None else self.converged.summary(),
             }
         )
         return summary
@@ -169,6 +174,8 @@ class Reproduction:
                 f"{claim['verdict'].upper()}"
             )
             lines.append(f"      {claim['evidence']}")
+        if self.converged is not None:
+            lines += self.converged.text_lines()
         if self.beyond is not None:
             lines += self.beyond.text_lines()
         return "\n".join(lines)
@@ -397,6 +404,8 @@ class Reproduction:
         parts.append(_html_table(self.ks_study))
         parts.append(_img(figures, "sensitivity.png", "RMS error against ks."))
         parts.append(_img(figures, "fuzzy_surface.png", "The fuzzy surface."))
+        if self.converged is not None:
+            parts.append(self.converged.html())
         if self.beyond is not None:
             parts.append(self.beyond.html())
         parts.append("</body></html>\n")

@@ -18,6 +18,7 @@ from .cases import (
     DEFAULT_TOLERANCE,
     DELAY_CASES,
 )
+from .converged import Converged, converged_period, verdict_changes
 from .experiment import Progress, RunMatrix, progress_printer, square_side
 from .report import Reproduction, Settings
 from .verdicts import claims
@@ -38,6 +39,7 @@ def reproduce(
     delays: Sequence[str] = DELAY_CASES,
     sensitivity: bool = True,
     beyond: bool = True,
+    converged: bool = True,
     tolerance: float = DEFAULT_TOLERANCE,
     workers: int | None = None,
     progress: Progress | bool | None = None,
@@ -66,6 +68,10 @@ def reproduce(
         Run the study beyond the paper: flexarm's controllers on the physical
         distant sensors and their robustness rows
         (:mod:`~flexarm.studies.reproduction.beyond`).
+    converged : bool
+        Rerun the matrix on a converged arm (three clamped-mass modes per link,
+        geometric stiffening) and judge the claims there too
+        (:mod:`~flexarm.studies.reproduction.converged`).
     tolerance : float
         "Tracks well" means RMS error <= ``tolerance`` x the square's side
         (:mod:`~flexarm.studies.reproduction.verdicts`).
@@ -97,16 +103,26 @@ def reproduce(
     workers = default_workers() if workers is None else workers
     workers = check_int(workers, "workers", _OWNER, minimum=1)
 
+    if not isinstance(converged, bool):
+        raise InvalidValueError(
+            f"The 'converged' parameter of {_OWNER} must be a bool. Got {converged!r} instead."
+        )
+    converged_dt = converged_period(dt) if converged else None
     if sensitivity:
         runs = RunMatrix.build(
-            ks=ks, law=law, ks_range=ks_values, laws=law_values, delays=delay_values
+            ks=ks,
+            law=law,
+            ks_range=ks_values,
+            laws=law_values,
+            delays=delay_values,
+            converged_dt=converged_dt,
         )
     else:
-        runs = RunMatrix.build(ks=ks, law=law)
+        runs = RunMatrix.build(ks=ks, law=law, converged_dt=converged_dt)
     runs.validate(duration, dt, workers)  # bad settings fail before the first run
 
     start = time.perf_counter()
-    cases, delay_study, ks_study = runs.run(
+    cases, delay_study, ks_study, converged_cases = runs.run(
         duration, dt, workers=workers, progress=progress_printer(progress)
     )
     extra = run_beyond(duration, dt, workers=workers) if beyond else None
@@ -130,4 +146,13 @@ def reproduce(
         wall_time_s=wall,
     )
     verdicts = claims(cases, ks_study, tolerance * side)
-    return Reproduction(cases, delay_study, ks_study, verdicts, settings, extra)
+    on_converged = None
+    if converged_dt is not None:
+        converged_claims = claims(converged_cases, [], tolerance * side)
+        on_converged = Converged(
+            converged_dt,
+            converged_cases,
+            converged_claims,
+            verdict_changes(verdicts, converged_claims),  # claim 4 needs a ks study: not here
+        )
+    return Reproduction(cases, delay_study, ks_study, verdicts, settings, extra, on_converged)

@@ -1,0 +1,101 @@
+"""Position and velocity of a point of the arm, compiled: :func:`point_kinematics`.
+
+What the simulator's sensors call at every control step; the NumPy reference is
+:func:`flexarm.model.kinematics.deflected_point`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._compile import njit_runtime_free
+from .arrays import LEN, ArmArrays
+
+__all__ = ["point_kinematics"]
+
+F64 = NDArray[np.float64]
+
+
+@njit_runtime_free(cache=True, nogil=True)
+def point_kinematics(
+    q: F64, dq: F64, model: ArmArrays, link: int, distance: float, phi: F64, out: F64
+) -> None:  # pragma: no cover - compiled
+    """Position and velocity of a point on a link, deflection included.
+
+    Parameters
+    ----------
+    q, dq : ndarray, shape (n_dof,)
+    model : ArmArrays
+    link : int
+        0-based link index.
+    distance : float
+        Distance along the undeformed link from its joint, m.
+    phi : ndarray, shape (n_modes of ``link``,) or (n_modes + n_modes**2,)
+        Mode shapes of ``link`` evaluated at ``distance``; with geometric
+        stiffening, followed by the shortening matrix ``S(distance)`` row by row
+        (:meth:`flexarm.FlexibleArm.point_basis` builds it). Without it the
+        point's own foreshortening is left out.
+    out : ndarray, shape (4,)
+        Written: ``x, y`` (m) and ``vx, vy`` (m/s) in the base frame.
+    """
+    ms = model.mode_start
+    shortening = model.shortening_quartic.shape[1] > 0
+    alpha = 0.0
+    alpha_dot = 0.0
+    px = 0.0
+    py = 0.0
+    vx = 0.0
+    vy = 0.0
+    for i in range(link + 1):
+        alpha += q[i]
+        alpha_dot += dq[i]
+        a0, a1 = ms[i], ms[i + 1]
+        nm = a1 - a0
+        w = 0.0
+        wd = 0.0
+        u = 0.0  # foreshortening of the point
+        ud = 0.0
+        if i < link:
+            x = model.link[i, LEN]
+            for r in range(a0, a1):
+                w += model.tip_deflection[r] * q[r]
+                wd += model.tip_deflection[r] * dq[r]
+            if shortening:
+                for r in range(a0, a1):
+                    sr = 0.0
+                    for c in range(a0, a1):
+                        sr += model.shortening_tip[r, c] * q[c]
+                    u += 0.5 * q[r] * sr
+                    ud += sr * dq[r]
+        else:
+            x = distance
+            for r in range(a0, a1):
+                w += phi[r - a0] * q[r]
+                wd += phi[r - a0] * dq[r]
+            if shortening and phi.shape[0] >= nm + nm * nm:
+                for j in range(nm):
+                    sr = 0.0
+                    for c in range(nm):
+                        sr += phi[nm + j * nm + c] * q[a0 + c]
+                    u += 0.5 * q[a0 + j] * sr
+                    ud += sr * dq[a0 + j]
+        c, s = np.cos(alpha), np.sin(alpha)
+        if shortening:
+            x -= u
+        px += c * x - s * w
+        py += s * x + c * w
+        # d/dt R(alpha) [x, w] = alpha_dot R S [x, w] + R [-ud, wd],  S = [[0, -1], [1, 0]]
+        vx += alpha_dot * (-c * w - s * x) - s * wd
+        vy += alpha_dot * (-s * w + c * x) + c * wd
+        if shortening:
+            vx -= c * ud
+            vy -= s * ud
+        if i < link:
+            for r in range(a0, a1):
+                alpha += model.tip_slope[r] * q[r]
+                alpha_dot += model.tip_slope[r] * dq[r]
+    out[0] = px
+    out[1] = py
+    out[2] = vx
+    out[3] = vy
