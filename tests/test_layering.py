@@ -105,6 +105,8 @@ WITHIN: dict[str, list[str]] = {
         "report",
         "accumulators",
         "_setup",
+        "chunked",
+        "_persist",
         "regression",
         "arma",
         "correlation",
