@@ -30,6 +30,7 @@ from .._io import JSONValue, json_ready
 from .._validation import check_int
 from .._version import __version__
 from ..errors import InvalidValueError
+from ..sim.batch import default_workers
 from .cluster import iter_cluster_records
 from .execute import Item, iter_records
 from .journal import (
@@ -183,19 +184,21 @@ def sweep(
         path = None if out_dir is None else out_dir / JOURNAL_FILE
         raise SweepInterrupted(len(records), len(unique), path) from None
     finally:
-        close = getattr(stream, "close", None)
-        if close is not None:
-            close()
-        bar.close()
-        if journal is not None:
-            journal.close()
+        try:
+            close = getattr(stream, "close", None)
+            if close is not None:
+                close()  # the runs in flight finish; their results are dropped
+        finally:
+            bar.close()
+            if journal is not None:
+                journal.close()
     info: dict[str, JSONValue] = {
         "source": spec.source,
         "runs": len(runs),
         "distinct_runs": len(unique),
         "resumed": resumed,
         "wall_time_s": time.perf_counter() - start,
-        "workers": workers,
+        "workers": (workers or 1) if client is not None else (workers or default_workers()),
         "scheduler": None if client is None else _address(client),
         "out": None if out_dir is None else str(out_dir),
         "files": [],
