@@ -58,6 +58,7 @@ Pitfalls
 from __future__ import annotations
 
 import math
+import socket
 from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING
 
@@ -107,8 +108,13 @@ def connect(address: str, timeout: float = 10.0) -> Client:
     if not have_distributed():
         raise InvalidValueError(f"a Dask scheduler needs dask.distributed: {DASK_EXTRA}")
     from distributed import Client
+    from distributed.comm.addressing import parse_address, parse_host_port
 
     try:
+        scheme, location = parse_address(address)
+        if scheme == "tcp":  # fail fast, before a Client that would linger on failure
+            host, port = parse_host_port(location, default_port=8786)
+            socket.create_connection((host, port), timeout=timeout).close()
         return Client(address, timeout=timeout)
     except (OSError, TimeoutError, ValueError, TypeError) as exc:
         text = " ".join(str(exc).split()) or type(exc).__name__
