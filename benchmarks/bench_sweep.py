@@ -84,16 +84,47 @@ def one_run(scenario: dict) -> tuple[float, float]:
     return t3 - t0, t2 - t1
 
 
-def time_sweep(path: pathlib.Path, workdir: pathlib.Path, k: int) -> tuple[float, dict]:
-    out = workdir / f"out{k}"
+def time_sweep(
+    path: pathlib.Path, out: pathlib.Path, extra: tuple[str, ...] = ()
+) -> tuple[float, dict]:
     buf = io.StringIO()
     t0 = time.perf_counter()
     with contextlib.redirect_stdout(buf):
-        status = main(["sweep", str(path), "--out", str(out), "--json"])
+        status = main(["sweep", str(path), "--out", str(out), "--json", *extra])
     wall = time.perf_counter() - t0
     if status != 0:
         sys.exit(f"flexarm sweep failed with status {status}")
     return wall, json.loads(buf.getvalue())
+
+
+def _warm() -> float:
+    """On a worker: import flexarm and load its Numba cache (a 10 ms run)."""
+    t0 = time.perf_counter()
+    from flexarm.sweeps.records import run_scenario
+
+    run_scenario({"simulation": {"duration": 0.01}})
+    return time.perf_counter() - t0
+
+
+def time_cluster(
+    path: pathlib.Path, workdir: pathlib.Path, args: argparse.Namespace, cores: int
+) -> list[float] | None:
+    """Wall times of the sweep on a warmed LocalCluster of ``cores`` processes."""
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        print("dask.distributed is not installed: no LocalCluster row", file=sys.stderr)
+        return None
+    print(f"timing {args.repeat} sweeps on a LocalCluster ...", file=sys.stderr)
+    with (
+        LocalCluster(
+            n_workers=cores, threads_per_worker=1, processes=True, dashboard_address="127.0.0.1:0"
+        ) as cluster,
+        Client(cluster) as client,
+    ):
+        client.run(_warm)
+        extra = ("--scheduler", cluster.scheduler_address)
+        return [time_sweep(path, workdir / f"c{k}", extra)[0] for k in range(args.repeat)]
 
 
 def main_(argv: list[str] | None = None) -> None:
@@ -101,6 +132,7 @@ def main_(argv: list[str] | None = None) -> None:
     p.add_argument("--runs", type=int, default=1000, help="runs in the sweep (default 1000)")
     p.add_argument("--repeat", type=int, default=3, help="timed sweeps (default 3)")
     p.add_argument("--single", type=int, default=20, help="runs timed alone (default 20)")
+    p.add_argument("--no-cluster", action="store_true", help="skip the LocalCluster row")
     p.add_argument("--json", action="store_true", help="print a JSON dict")
     args = p.parse_args(argv)
 
@@ -120,7 +152,8 @@ def main_(argv: list[str] | None = None) -> None:
         run_times = [s[0] for s in singles]
         sim_times = [s[1] for s in singles]
         print(f"timing {args.repeat} sweeps of {args.runs} runs ...", file=sys.stderr)
-        sweeps = [time_sweep(path, workdir, k) for k in range(args.repeat)]
+        sweeps = [time_sweep(path, workdir / f"out{k}") for k in range(args.repeat)]
+        cluster_walls = None if args.no_cluster else time_cluster(path, workdir, args, cores)
     machine["loadavg_at_end"] = list(os.getloadavg())
     walls = [w for w, _ in sweeps]
     best_run, median_run = min(run_times), statistics.median(run_times)
@@ -141,6 +174,16 @@ def main_(argv: list[str] | None = None) -> None:
         },
         "statuses": {k: sweeps[0][1][k] for k in ("ok", "diverged", "error")},
     }
+    if cluster_walls:
+        result["cluster_sweep_s"] = {
+            "best": min(cluster_walls),
+            "median": statistics.median(cluster_walls),
+            "all": cluster_walls,
+        }
+        result["cluster_ratio"] = {
+            "best": min(cluster_walls) / ideal_best,
+            "median": statistics.median(cluster_walls) / ideal_median,
+        }
     if args.json:
         print(json.dumps(result, indent=2))
         return
@@ -154,6 +197,12 @@ def main_(argv: list[str] | None = None) -> None:
         ("flexarm sweep, s", min(walls), statistics.median(walls)),
         ("ratio sweep / ideal", result["ratio"]["best"], result["ratio"]["median"]),
     ]
+    if cluster_walls:
+        c = result["cluster_sweep_s"]
+        rows += [
+            (f"sweep --scheduler ({cores} procs), s", c["best"], c["median"]),
+            ("ratio cluster sweep / ideal", *result["cluster_ratio"].values()),
+        ]
     for name, best, med in rows:
         print(f"{name:32}{best:>10.3f}{med:>10.3f}")
     print(f"statuses: {result['statuses']}  (target: ratio <= 1.2)")
