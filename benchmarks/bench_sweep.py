@@ -18,7 +18,9 @@ loading excluded):
     A run as the sweep does it, alone on one thread:
     ``Scenario.from_dict(scenario)`` then ``simulate(...)`` and ``metrics()``, for
     ``--single`` runs of the sweep (best and median). ``simulate`` alone is given
-    beside it.
+    beside it, and the share of the compiled loop (``result.info["wall_time_s"]``),
+    the only part that releases the GIL: with a share ``s``, threads on ``c`` cores
+    cannot do better than a ratio of about ``c (1 - s)``.
 ``ideal``
     One run's time x runs / cores: the sweep on every core with no overhead.
 ``flexarm sweep``
@@ -72,8 +74,9 @@ seed = 14
 """
 
 
-def one_run(scenario: dict) -> tuple[float, float]:
-    """Wall time of one run as the sweep does it, and of its simulate() alone, s."""
+def one_run(scenario: dict) -> tuple[float, float, float]:
+    """Wall time of one run as the sweep does it, of its simulate() alone and of the
+    compiled loop inside (which releases the GIL), s."""
     t0 = time.perf_counter()
     sc = Scenario.from_dict(scenario)
     t1 = time.perf_counter()
@@ -81,7 +84,7 @@ def one_run(scenario: dict) -> tuple[float, float]:
     t2 = time.perf_counter()
     res.metrics()
     t3 = time.perf_counter()
-    return t3 - t0, t2 - t1
+    return t3 - t0, t2 - t1, float(res.info["wall_time_s"])
 
 
 def time_sweep(
@@ -151,8 +154,13 @@ def main_(argv: list[str] | None = None) -> None:
         singles = [one_run(sc) for sc in scenarios]
         run_times = [s[0] for s in singles]
         sim_times = [s[1] for s in singles]
+        loop_share = statistics.median(s[2] / s[0] for s in singles)
         print(f"timing {args.repeat} sweeps of {args.runs} runs ...", file=sys.stderr)
         sweeps = [time_sweep(path, workdir / f"out{k}") for k in range(args.repeat)]
+        print(f"timing {args.repeat} sweeps with --processes ...", file=sys.stderr)
+        proc_walls = [
+            time_sweep(path, workdir / f"p{k}", ("--processes",))[0] for k in range(args.repeat)
+        ]
         cluster_walls = None if args.no_cluster else time_cluster(path, workdir, args, cores)
     machine["loadavg_at_end"] = list(os.getloadavg())
     walls = [w for w, _ in sweeps]
@@ -166,6 +174,7 @@ def main_(argv: list[str] | None = None) -> None:
         "simulated_s_per_run": 2.0,
         "one_run_s": {"best": best_run, "median": median_run},
         "simulate_only_s": {"best": min(sim_times), "median": statistics.median(sim_times)},
+        "loop_share": loop_share,
         "ideal_s": {"best": ideal_best, "median": ideal_median},
         "sweep_s": {"best": min(walls), "median": statistics.median(walls), "all": walls},
         "ratio": {
@@ -173,6 +182,15 @@ def main_(argv: list[str] | None = None) -> None:
             "median": statistics.median(walls) / ideal_median,
         },
         "statuses": {k: sweeps[0][1][k] for k in ("ok", "diverged", "error")},
+    }
+    result["processes_sweep_s"] = {
+        "best": min(proc_walls),
+        "median": statistics.median(proc_walls),
+        "all": proc_walls,
+    }
+    result["processes_ratio"] = {
+        "best": min(proc_walls) / ideal_best,
+        "median": statistics.median(proc_walls) / ideal_median,
     }
     if cluster_walls:
         result["cluster_sweep_s"] = {
@@ -197,6 +215,10 @@ def main_(argv: list[str] | None = None) -> None:
         ("flexarm sweep, s", min(walls), statistics.median(walls)),
         ("ratio sweep / ideal", result["ratio"]["best"], result["ratio"]["median"]),
     ]
+    rows += [
+        ("flexarm sweep --processes, s", min(proc_walls), statistics.median(proc_walls)),
+        ("ratio --processes / ideal", *result["processes_ratio"].values()),
+    ]
     if cluster_walls:
         c = result["cluster_sweep_s"]
         rows += [
@@ -206,6 +228,11 @@ def main_(argv: list[str] | None = None) -> None:
     for name, best, med in rows:
         print(f"{name:32}{best:>10.3f}{med:>10.3f}")
     print(f"statuses: {result['statuses']}  (target: ratio <= 1.2)")
+    print(
+        f"the compiled loop (no GIL) is {100 * loop_share:.0f} % of a run (median); the rest "
+        f"holds the GIL, so {cores} threads cannot beat a ratio of about "
+        f"{max(1.0, cores * (1 - loop_share)):.2f} (processes can)"
+    )
 
 
 if __name__ == "__main__":

@@ -121,7 +121,8 @@ def test_ctrl_c_is_one_line_exit_130_and_a_consistent_journal(capsys, small, tmp
 
 
 @pytest.mark.skipif(os.name != "posix", reason="POSIX signals")
-def test_a_real_sigint_leaves_whole_lines_and_the_sweep_resumes(tmp_path):
+@pytest.mark.parametrize("how", [[], ["--processes"]], ids=["threads", "processes"])
+def test_a_real_sigint_leaves_whole_lines_and_the_sweep_resumes(tmp_path, how):
     """SIGINT to the command while runs are under way: exit 130, one line on stderr,
     the journal's lines whole; the same sweep then does only the runs left."""
     n = 60
@@ -131,7 +132,7 @@ def test_a_real_sigint_leaves_whole_lines_and_the_sweep_resumes(tmp_path):
         '"controller.zeta" = { distribution = "uniform", low = 0.5, high = 0.9 }\n'
     )
     out = tmp_path / "out"
-    argv = [sys.executable, "-m", "flexarm", "sweep", str(sweep_file), "--out", str(out)]
+    argv = [sys.executable, "-m", "flexarm", "sweep", str(sweep_file), "--out", str(out), *how]
     proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     journal = out / JOURNAL_FILE
     deadline = time.monotonic() + 120
@@ -291,6 +292,7 @@ def test_a_missing_sweep_file(capsys, tmp_path):
         (["--format", "xml"], "argument --format: invalid choice"),
         (["--scheduler", "nonsense://x"], "argument --scheduler: cannot connect"),
         (["--scheduler", "tcp://127.0.0.1:1"], "argument --scheduler: cannot connect"),
+        (["--scheduler", "tcp://127.0.0.1:1", "--processes"], "argument --processes: not with"),
     ],
 )
 def test_bad_options_are_one_line_status_2(capsys, small, tmp_path, extra, needle):

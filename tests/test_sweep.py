@@ -197,6 +197,23 @@ def test_each_row_is_the_run_done_alone_bit_for_bit():
             assert row[name] == alone[name]
 
 
+def test_processes_give_the_threads_table_bit_for_bit():
+    spec = spec_of(
+        grid={"sensor.noise_std": [1e-4, -1.0]},
+        monte_carlo={
+            "n": 3,
+            "seed": 2,
+            "simulation.seed": {"distribution": "integers", "low": 0, "high": 1000},
+        },
+    )
+    threads = sweep(spec, workers=2, progress=False)
+    procs = sweep(spec, workers=2, processes=True, chunk_size=2, progress=False)
+    assert procs.info["processes"] and procs.counts() == {"ok": 3, "diverged": 0, "error": 3}
+    assert procs.equals(threads, ignore=("wall_time_s",))
+    with pytest.raises(InvalidValueError, match="'processes' parameter of sweep"):
+        sweep(spec, processes=True, client=object(), progress=False)
+
+
 def test_failures_are_recorded_per_run_and_the_sweep_goes_on():
     spec = spec_of(grid={"sensor.noise_std": [0.0, -1.0], "simulation.max_deflection": [4.5, 1e-9]})
     table = sweep(spec, workers=2, progress=False)

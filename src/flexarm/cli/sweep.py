@@ -56,7 +56,8 @@ def _format_row(row: dict[str, Any], table: SweepTable, metric: str) -> str:
 
 def _format_summary(summary: dict[str, Any], spec: SweepSpec, table: SweepTable) -> str:
     s = summary
-    where = f"on {s['scheduler']}" if s["scheduler"] else f"on {s['workers']} worker(s)"
+    kind = "process(es)" if s["processes"] else "thread(s)"
+    where = f"on {s['scheduler']}" if s["scheduler"] else f"on {s['workers']} {kind}"
     lines = [
         f"{_PROG}: {s['runs']} runs of {spec.source} ({_shape(spec)}) in "
         f"{s['wall_time_s']:.3g} s {where}",
@@ -113,6 +114,11 @@ def _run(args: argparse.Namespace) -> int:
             f"{_PROG}: error: argument --format: parquet needs pyarrow, which is not "
             f"installed: {PARQUET_EXTRA}"
         )
+    if args.processes and args.scheduler is not None:
+        raise UsageError(
+            f"{_PROG}: error: argument --processes: not with --scheduler (a Dask cluster "
+            "has its own processes)"
+        )
     client = None
     if args.scheduler is not None:
         try:
@@ -126,6 +132,7 @@ def _run(args: argparse.Namespace) -> int:
             workers=args.workers,
             client=client,
             chunk_size=args.chunk_size,
+            processes=args.processes,
             parquet=parquet,
             progress=None if not args.json else False,
         )
@@ -161,7 +168,8 @@ examples/sweep_noise.toml; schema in flexarm.sweeps.spec.
 
 _EPILOG = """\
 runs: on every core of this machine by default (threads: each run's compiled loop
-releases the GIL); --scheduler tcp://HOST:8786 sends chunks of runs to a Dask cluster
+releases the GIL; --processes: worker processes, faster for short runs whose Python
+set-up dominates); --scheduler tcp://HOST:8786 sends chunks of runs to a Dask cluster
 (pip install 'flexarm[dask]'; see flexarm.sweeps.cluster for SLURM and the pitfalls).
 A run that diverges or cannot be built is recorded (status diverged or error, with
 the message) and the sweep goes on.
@@ -196,6 +204,12 @@ def add_parser(sub: Any) -> None:
         metavar="N",
         help="threads on this machine (default: every core); with --scheduler, threads "
         "per task on its worker (default 1)",
+    )
+    p.add_argument(
+        "--processes",
+        action="store_true",
+        help="run in worker processes forked from this one rather than threads: faster "
+        "when runs are short and their Python set-up dominates (same numbers)",
     )
     p.add_argument(
         "--scheduler",

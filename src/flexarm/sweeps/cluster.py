@@ -57,13 +57,12 @@ Pitfalls
 
 from __future__ import annotations
 
-import math
 import socket
 from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING
 
 from ..errors import FlexarmError, InvalidValueError
-from .execute import Item, run_chunk
+from .execute import Item, default_chunk_size, run_chunk
 from .records import Record
 
 if TYPE_CHECKING:
@@ -73,7 +72,6 @@ __all__ = [
     "DASK_EXTRA",
     "ClusterError",
     "connect",
-    "default_chunk_size",
     "have_distributed",
     "iter_cluster_records",
 ]
@@ -121,17 +119,6 @@ def connect(address: str, timeout: float = 10.0) -> Client:
         raise InvalidValueError(
             f"cannot connect to the Dask scheduler at {address!r}: {text}"
         ) from None
-
-
-def default_chunk_size(n_runs: int, threads: int) -> int:
-    """About four chunks per worker thread, at least one run each.
-
-    Examples
-    --------
-    >>> default_chunk_size(1000, 2), default_chunk_size(3, 8)
-    (125, 1)
-    """
-    return max(1, math.ceil(n_runs / (4 * max(1, threads))))
 
 
 def iter_cluster_records(

@@ -32,7 +32,7 @@ from .._version import __version__
 from ..errors import InvalidValueError
 from ..sim.batch import default_workers
 from .cluster import iter_cluster_records
-from .execute import Item, iter_records
+from .execute import Item, iter_process_records, iter_records
 from .journal import (
     JOURNAL_FILE,
     SWEEP_FILE,
@@ -87,6 +87,7 @@ def sweep(
     workers: int | None = None,
     client: Client | None = None,
     chunk_size: int | None = None,
+    processes: bool = False,
     parquet: bool | None = None,
     progress: bool | None = None,
 ) -> SweepTable:
@@ -105,13 +106,20 @@ def sweep(
         ``summary.json`` at the end. None: nothing is written and an
         interrupted sweep cannot resume.
     workers : int, optional
-        Threads on this machine (default: every core this process may use).
-        With ``client``: the threads each task uses on its worker (default 1).
+        Threads (or processes) on this machine (default: every core this process
+        may use). With ``client``: the threads each task uses on its worker
+        (default 1).
     client : distributed.Client, optional
         Run on this Dask cluster instead of this machine
         (:mod:`flexarm.sweeps.cluster`).
     chunk_size : int, optional
-        Runs per Dask task (default: about four tasks per worker thread).
+        Runs per Dask task (default: about four tasks per worker thread) or per
+        chunk of a process (default: the same, at most 16).
+    processes : bool
+        Run in worker processes forked from this one rather than in threads
+        (:func:`~flexarm.sweeps.execute.iter_process_records`): faster when the
+        runs are short and their set-up, which holds the GIL, dominates. The
+        numbers are the same.
     parquet : bool, optional
         Also write ``runs.parquet``: None (default) when pyarrow is installed,
         True always (an error without pyarrow), False never.
@@ -143,6 +151,11 @@ def sweep(
         check_int(workers, "workers", _OWNER, minimum=1)
     if chunk_size is not None:
         check_int(chunk_size, "chunk_size", _OWNER, minimum=1)
+    if processes and client is not None:
+        raise InvalidValueError(
+            "The 'processes' parameter of sweep must be False with a 'client' (a Dask "
+            "cluster has its own processes). Got True instead."
+        )
     if parquet is None:
         parquet = have_pyarrow()
     elif parquet and not have_pyarrow():
@@ -172,6 +185,8 @@ def sweep(
         stream: Iterator[Record] = iter_cluster_records(
             list(items), client, chunk_size=chunk_size, workers=workers or 1
         )
+    elif processes:
+        stream = iter_process_records(list(items), workers=workers, chunk_size=chunk_size)
     else:
         stream = iter_records(items, workers=workers)
     try:
@@ -199,6 +214,7 @@ def sweep(
         "resumed": resumed,
         "wall_time_s": time.perf_counter() - start,
         "workers": (workers or 1) if client is not None else (workers or default_workers()),
+        "processes": processes,
         "scheduler": None if client is None else _address(client),
         "out": None if out_dir is None else str(out_dir),
         "files": [],
