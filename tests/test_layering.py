@@ -26,6 +26,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("sensing",),  # what a controller can see: sensors and transport delays
     ("control",),  # references, shapers, control laws, linear analysis
     ("sim",),  # the simulator, its results and metrics, scenario files
+    ("sweeps",),  # grid and Monte Carlo sweeps of scenarios, on every core or a Dask cluster
     # the paper's reproduction, the robot-joint identification study; Gymnasium environments
     ("studies", "envs"),
     ("cli",),  # the command line
@@ -87,6 +88,18 @@ WITHIN: dict[str, list[str]] = {
         "open_loop",
         "scenario_schema",
         "scenario",
+    ],
+    "sweeps": [
+        "reader",
+        "keys",
+        "distributions",
+        "spec",
+        "records",
+        "table",
+        "journal",
+        "execute",
+        "cluster",
+        "driver",
     ],
     "fuzzy": ["sets", "compiled", "system", "paper"],
     "envs": ["config", "kernel", "core", "env", "vector"],
