@@ -11,6 +11,7 @@ controllers, sensors, references -> results; data -> estimators):
 * :mod:`flexarm.ident` — kernel regression and Hammerstein identification;
 * :mod:`flexarm.studies` — the paper's reproduction and the robot-joint study;
 * :mod:`flexarm.envs` — Gymnasium environments (the ``rl`` extra);
+* :mod:`flexarm.figures` — figure files (PNG, PDF, SVG) and the plots' style;
 * :mod:`flexarm.cli` — the ``flexarm`` command.
 
 Everything is imported on first use: ``import flexarm`` is cheap (no Numba, no
@@ -29,6 +30,7 @@ _SUBPACKAGES = (
     "cli",
     "control",
     "envs",
+    "figures",
     "fuzzy",
     "ident",
     "model",
