@@ -127,13 +127,14 @@ class Bands:
         pct = f"{100 * self.level:g} % band"
         draw_phi_band(ax1, self)
         ax1.plot(self.grid, self.phi, lw=1.5, label="estimate")
-        ax1.set(xlabel=u_label, ylabel="nonlinearity φ (normalised)")
+        ax1.set(xlabel=u_label, ylabel="φ(u) (normalised)")
+        ax1.set_title("nonlinearity")
         ax1.legend(loc="best")
         k = np.arange(self.impulse.shape[0])
         draw_impulse_band(ax2, self)
         ax2.plot(k, self.impulse, "o-", ms=2.5, label="estimate")
-        ax2.set(xlabel="lag k (samples)", ylabel="impulse response λ_k (per φ unit)")
-        ax2.set_title(f"{pct}, {self.n_boot} block-bootstrap replicates")
+        ax2.set(xlabel="lag k (samples)", ylabel="$\\lambda_k$ (per φ unit)")
+        ax2.set_title(f"impulse response\n{pct}, {self.n_boot} block-bootstrap replicates")
         ax2.legend(loc="best")
         return fig
 

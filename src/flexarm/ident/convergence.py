@@ -256,6 +256,8 @@ class ConvergenceResult:
         )
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.set_xticks(n, [f"{v:g}" for v in self.n], minor=False)  # ticks at the sizes run
+        ax.set_xticks([], minor=True)
         ax.set_xlabel("n (samples)")
         ax.set_ylabel("MISE (-)")  # the study's functions and noise are dimensionless
         ax.set_title(f"{self.settings.get('function', 'm')}: p = {self.order:g}")

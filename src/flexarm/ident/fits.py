@@ -214,7 +214,9 @@ def _draw_data(ax: Axes, x: F64, y: F64) -> None:
     if n <= _DENSITY_ABOVE:
         ax.plot(x, y, ".", ms=2.5, mew=0, alpha=0.5, color="0.45", label="data", zorder=1)
         return
-    ax.hexbin(x, y, gridsize=(60, 30), bins="log", mincnt=1, cmap="Greys", lw=0, zorder=1)
+    ax.hexbin(
+        x, y, gridsize=(50, 25), bins="log", mincnt=1, cmap="Greys", alpha=0.6, lw=0, zorder=1
+    )
     ax.plot([], [], "h", ms=5, color="0.55", label=f"data: density of {n} samples")
 
 
@@ -385,13 +387,13 @@ class HammersteinFit:
             draw_impulse_band(ax2, self.bands)
         ax1.plot(self.grid, self.phi, lw=1.5, label="estimate")
         ax1.set_xlabel(f"{self.u_label} ({self.u_unit})")
-        ax1.set_ylabel(f"nonlinearity φ ({scale})")
-        ax1.set_title(f"{self.normalisation}; {self.model.method_}-input path")
+        ax1.set_ylabel(f"φ(u) ({scale})")
+        ax1.set_title(f"nonlinearity, {self.normalisation}\n({self.model.method_}-input path)")
         ir = self.model.impulse_response_
         ax2.plot(np.arange(ir.shape[0]), ir, "o-", ms=2.5, label="estimate")
         ax2.set_xlabel("lag k (samples)")
-        ax2.set_ylabel(f"impulse response λ_k ({self.y_unit} per φ unit)")
-        ax2.set_title(f"impulse response (ARMA order {self.model.order_})")
+        ax2.set_ylabel(f"$\\lambda_k$ ({self.y_unit} per φ unit)")
+        ax2.set_title(f"impulse response\n(ARMA order {self.model.order_})")
         if self.bands is not None:
             ax1.legend(loc="best")
             ax2.legend(loc="best")
@@ -410,7 +412,7 @@ class HammersteinFit:
         )
         ax3.set_xlabel("n (samples)")
         ax3.set_ylabel(f"{self.y_label} ({self.y_unit})")
-        ax3.set_title(f"free run: first {k.shape[0]} of {n} samples")
+        ax3.set_title(f"free run on the data\n(first {k.shape[0]} of {n} samples)")
         ax3.legend(loc="best")
         return fig
 

@@ -226,8 +226,8 @@ class JointIdentification:
             sel = np.abs(s.x) <= 3 * w
             inset.plot(1e3 * s.x[sel], s.truth[sel], "k--", lw=0.8, zorder=3)
             inset.plot(1e3 * s.x[sel], s.estimate[sel], lw=1.2)
-            inset.set_title("soft windup", fontsize="small", pad=2)
-            inset.tick_params(labelsize="x-small", pad=1)
+            inset.set_title("soft windup", fontsize=7, pad=2)
+            inset.tick_params(labelsize=6, pad=1)
         f = self.friction
         ax = axes[0, 1]
         ax.plot(f.x, f.truth, "k--", lw=0.8, zorder=3, label="true")
@@ -248,8 +248,8 @@ class JointIdentification:
             inset = ax.inset_axes((0.58, 0.08, 0.38, 0.38))
             inset.plot(xs, truth(xs), "k--", lw=0.8, zorder=3)
             inset.plot(xs, self.hammerstein.nonlinearity(xs), lw=1.2)
-            inset.set_title("dead band", fontsize="small", pad=2)
-            inset.tick_params(labelsize="x-small", pad=1)
+            inset.set_title("dead band", fontsize=7, pad=2)
+            inset.tick_params(labelsize=6, pad=1)
         v = self.validation
         ax = axes[1, 1]
         m = min(200, v["t"].shape[0])

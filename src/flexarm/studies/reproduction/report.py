@@ -217,11 +217,16 @@ class Reproduction:
         """
         fmt = FigureFormat.coerce(figure_format)
         target = Path(os.path.abspath(out))
-        files = self.figures(fmt)
+        drawn = {stem: self.draw(stem) for stem in FIGURES}
+        files = {fmt.filename(stem): figure_bytes(fig, fmt) for stem, fig in drawn.items()}
         if fmt.format == "png" and fmt.dpi <= _EMBED_MAX_DPI:
             embedded, dpi = files, fmt.dpi
-        else:
-            embedded, dpi = self.figures(FigureFormat("png", REPORT_DPI)), REPORT_DPI
+        else:  # the same figures, as PNG for the page
+            dpi = REPORT_DPI
+            page_format = FigureFormat("png", dpi)
+            for fig in drawn.values():
+                fig.set_layout_engine("none")  # laid out once already (in figure fractions)
+            embedded = {f"{s}.png": figure_bytes(fig, page_format) for s, fig in drawn.items()}
         with output_directory(target) as tmp:
             summary = self.summary()
             (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")

@@ -7,7 +7,7 @@ rad/s, each to three significant figures (a tracking error is known to a few
 per cent, not to the float's sixteen digits), and whole numbers as they are.
 
 >>> sig(0.11812), sig(1234.6), sig(-0.000544), sig(0.0480), sig(0.0)
-('0.118', '1235', '-0.000544', '0.048', '0')
+('0.118', '1230', '-0.000544', '0.048', '0')
 >>> mm(0.11812), mm(None), mm(float("inf"))
 ('118 mm', '–', 'inf')
 """
@@ -23,9 +23,9 @@ MISSING = "–"
 
 
 def sig(value: float | None, digits: int = 3) -> str:
-    """``value`` to ``digits`` significant figures (trailing zeros dropped), in plain
-    notation between 1e-5 and 1e6 (more integer digits are kept, not rounded away);
-    :data:`MISSING` for None or NaN; ``"inf"`` for infinity."""
+    """``value`` to ``digits`` significant figures (trailing decimal zeros dropped),
+    in plain notation between 1e-5 and 1e6; :data:`MISSING` for None or NaN;
+    ``"inf"`` for infinity."""
     if value is None or math.isnan(value):
         return MISSING
     if math.isinf(value):
@@ -35,10 +35,10 @@ def sig(value: float | None, digits: int = 3) -> str:
     magnitude = math.floor(math.log10(abs(value)))
     if not -5 <= magnitude < 6:
         return f"{value:.{digits - 1}e}"
-    decimals = max(digits - 1 - magnitude, 0)
-    text = f"{value:.{decimals}f}"
-    if "." in text:
-        text = text.rstrip("0").rstrip(".")  # 0.048 s, not 0.0480 s
+    decimals = digits - 1 - magnitude
+    if decimals <= 0:  # whole numbers rounded too: 418273 -> 418000
+        return f"{round(value, decimals):.0f}"
+    text = f"{value:.{decimals}f}".rstrip("0").rstrip(".")  # 0.048 s, not 0.0480 s
     return "0" if float(text) == 0 else text
 
 
