@@ -312,7 +312,8 @@ def add_parser(sub: Any) -> None:
         type=_controller_option,
         metavar="|".join((*CONTROLLERS, "MODULE:FACTORY")),
         help="pd: the paper's Jacobian-transpose PD gains from the first link's first "
-        "frequency (default); jt-pd: JacobianTransposePD with the scenario's kp, kd; "
+        "frequency (default); jt-pd: the same law with the scenario's kp, kd (named pd in "
+        "the results); "
         "joint-pd: JointPD; fuzzy: the paper's gains with the fuzzy adaptive law "
         "(FuzzyAdaptiveJTPD; set ks and law in the scenario file); lqg: observer-based "
         "LQG from the sensor alone with rigid feedforward; reflected: PD on the reflected "
