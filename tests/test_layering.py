@@ -22,6 +22,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("_version", "errors"),  # the version; the error types
     # lazy names, checks, atomic output, Numba, limits on a request's memory and time
     ("_lazy", "_validation", "_io", "_compile", "_budget"),
+    ("figures",),  # figure files (format, resolution, atomic writes) and the plots' style
     ("model", "fuzzy", "ident"),  # the plant; fuzzy inference; estimators from data
     ("sensing",),  # what a controller can see: sensors and transport delays
     ("control",),  # references, shapers, control laws, linear analysis

@@ -13,6 +13,7 @@ controllers, sensors, references -> results; data -> estimators):
   (``flexarm.sweep``), on every core or a Dask cluster;
 * :mod:`flexarm.studies` — the paper's reproduction and the robot-joint study;
 * :mod:`flexarm.envs` — Gymnasium environments (the ``rl`` extra);
+* :mod:`flexarm.figures` — figure files (PNG, PDF, SVG) and the plots' style;
 * :mod:`flexarm.cli` — the ``flexarm`` command.
 
 Everything is imported on first use: ``import flexarm`` is cheap (no Numba, no
@@ -31,6 +32,7 @@ _SUBPACKAGES = (
     "cli",
     "control",
     "envs",
+    "figures",
     "fuzzy",
     "ident",
     "model",
