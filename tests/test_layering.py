@@ -54,6 +54,8 @@ WITHIN: dict[str, list[str]] = {
         "dynamics_points",
         "dynamics_two_links",
         "dynamics",
+        "packed",
+        "backends",
         "prescribed",
         "arm",
     ],

@@ -30,10 +30,14 @@ RUNTIME_FREE = _runtime_free_options()
 _Fn = TypeVar("_Fn", bound=Callable[..., Any])
 
 
-def njit_runtime_free(**options: Any) -> Callable[[_Fn], _Fn]:
-    """``numba.njit(**options)`` compiled without the refcount runtime where
-    this Numba supports it (for hot functions that allocate nothing)."""
-    decorator: Callable[[_Fn], _Fn] = nb.njit(**options, **RUNTIME_FREE)  # type: ignore[call-overload]
+def njit_runtime_free(*signatures: Any, **options: Any) -> Callable[[_Fn], _Fn]:
+    """``numba.njit(*signatures, **options)`` compiled without the refcount runtime
+    where this Numba supports it (for hot functions that allocate nothing).
+
+    ``signatures`` (optional, a list of Numba signatures) compiles those eagerly and
+    no others: a call with other argument types raises TypeError.
+    """
+    decorator: Callable[[_Fn], _Fn] = nb.njit(*signatures, **options, **RUNTIME_FREE)  # type: ignore[call-overload]
     return decorator
 
 

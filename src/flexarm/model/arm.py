@@ -86,6 +86,7 @@ from .._validation import (
 )
 from ..errors import InvalidTypeError, InvalidValueError
 from .arrays import ArmArrays
+from .backends import Backends
 from .foreshortening import shortening_matrix
 from .joints import LinearJoint, NonlinearJoint
 from .kinematics import RigidKinematics, deflected_point
@@ -110,7 +111,7 @@ _OWNER = "FlexibleArm"
 
 
 @dataclass(frozen=True)
-class FlexibleArm(RigidKinematics):
+class FlexibleArm(Backends, RigidKinematics):
     """A planar arm of ``N >= 1`` flexible links on revolute joints.
 
     Parameters
@@ -393,26 +394,9 @@ class FlexibleArm(RigidKinematics):
     def _check_q(self, q: ArrayLike, name: str = "q") -> NDArray[Any]:
         return check_array(q, name, _OWNER, shape=(self.n_dof,))
 
-    def _check_batch_q(self, q: ArrayLike) -> NDArray[Any]:
-        arr = check_array(q, "q", _OWNER)
-        if arr.ndim not in (1, 2) or arr.shape[-1] != self.n_dof:
-            raise InvalidValueError(
-                f"The 'q' parameter of {_OWNER} must be of shape ({self.n_dof},) or "
-                f"(m, {self.n_dof}). Got shape {arr.shape} instead."
-            )
-        return arr
-
     # --------------------------------------------------- body Jacobians (NumPy)
-    def mass_matrix(self, q: ArrayLike) -> NDArray[Any]:
-        """Mass matrix ``M(q)``, shape ``(n_dof, n_dof)``, symmetric positive definite.
-
-        Parameters
-        ----------
-        q : array_like, shape (n_dof,)
-            Coordinates (joint angles in rad, then modal coordinates). Complex
-            values are accepted (used for complex-step derivatives).
-        """
-        q = self._check_q(q)
+    def _mass_matrix_numpy(self, q: NDArray[Any]) -> NDArray[Any]:
+        """The NumPy reference of :meth:`mass_matrix` for one ``q`` (real or complex)."""
         M = np.zeros((self.n_dof, self.n_dof), dtype=np.result_type(q, float))
         for Jb, Mb, _ in body_terms(self, q, None):
             M += Jb.T @ Mb @ Jb
@@ -430,7 +414,7 @@ class FlexibleArm(RigidKinematics):
     def mass_matrix_derivatives(self, q: ArrayLike) -> NDArray[np.float64]:
         """``dM/dq_k`` for every ``k``, shape ``(n_dof, n_dof, n_dof)`` (k first),
         by complex-step differentiation (exact to rounding)."""
-        return mass_matrix_derivatives(self.mass_matrix, self._check_q(q).real)
+        return mass_matrix_derivatives(self._mass_matrix_numpy, self._check_q(q).real)
 
     def coriolis(self, q: ArrayLike, dq: ArrayLike) -> NDArray[np.float64]:
         """The Coriolis matrix ``C(q, dq)`` from Christoffel symbols of the first kind.
@@ -462,46 +446,12 @@ class FlexibleArm(RigidKinematics):
                 out[k] -= jt.friction(dq[k])
         return out  # type: ignore[no-any-return]
 
-    def forward_dynamics(
-        self, q: ArrayLike, dq: ArrayLike, tau: ArrayLike, *, backend: str = "numpy"
-    ) -> NDArray[np.float64]:
-        """Accelerations ``qddot = M^-1 (Q(q, dq, tau) - C dq)`` with ``Q`` from
-        :meth:`generalized_forces`.
-
-        Parameters
-        ----------
-        q, dq : array_like, shape (n_dof,)
-            Coordinates and rates (rad, rad/s; modal units).
-        tau : array_like, shape (n_links,)
-            Joint (motor) torques, N m.
-        backend : {"numpy", "compiled"}
-            ``"numpy"`` is the readable reference; ``"compiled"`` calls the Numba
-            kernel :func:`flexarm.model.dynamics.forward_dynamics` (compiled on first use,
-            cached on disk).
-
-        Returns
-        -------
-        ndarray, shape (n_dof,)
-        """
-        check_option(backend, "backend", _OWNER, ("numpy", "compiled"))
-        q, dq = self._check_q(q), self._check_q(dq, "dq")
-        tau = check_array(tau, "tau", _OWNER, shape=(self.n_links,))
-        if backend == "compiled":
-            from . import dynamics  # Numba is loaded on first use
-
-            ws = dynamics.make_workspace(self.n_dof)
-            ddq = np.empty(self.n_dof)
-            dynamics.forward_dynamics(
-                np.ascontiguousarray(q, dtype=float),
-                np.ascontiguousarray(dq, dtype=float),
-                np.ascontiguousarray(tau, dtype=float),
-                self.arrays,
-                ws,
-                ddq,
-            )
-            return ddq
+    def _forward_dynamics_numpy(
+        self, q: NDArray[Any], dq: NDArray[Any], tau: NDArray[Any]
+    ) -> NDArray[Any]:
+        """The NumPy reference of :meth:`forward_dynamics` for one state."""
         rhs = self.generalized_forces(q, dq, tau) - self.velocity_terms(q, dq)
-        return np.linalg.solve(self.mass_matrix(q), rhs)
+        return np.linalg.solve(self._mass_matrix_numpy(q), rhs)
 
     def energy(self, q: ArrayLike, dq: ArrayLike) -> tuple[float, float]:
         """Kinetic and potential (elastic: links and joint springs) energy in J."""
@@ -552,24 +502,8 @@ class FlexibleArm(RigidKinematics):
         return np.sqrt(np.clip(lam, 0.0, None))  # type: ignore[no-any-return]
 
     # -------------------------------------------------------------- kinematics
-    def point_position(self, q: ArrayLike, link: int, distance: float) -> NDArray[np.float64]:
-        """Position of the point ``distance`` m along link ``link``, deflection included.
-
-        Parameters
-        ----------
-        q : array_like, shape (n_dof,) or (m, n_dof)
-            One configuration or a time series of them.
-        link : int
-            0-based link index.
-        distance : float
-            Distance from the link's joint along the undeformed link, m, in
-            ``[0, L]``.
-
-        Returns
-        -------
-        ndarray, shape (2,) or (m, 2)
-            ``(x, y)`` in m, base frame.
-        """
+    def _check_point(self, link: int, distance: float) -> tuple[int, float]:
+        """``link`` (0-based) and ``distance`` (m, in ``[0, L]``) checked."""
         link = self._check_link(link)
         L = self.links[link].length
         distance = check_real(distance, "distance", _OWNER)
@@ -578,7 +512,12 @@ class FlexibleArm(RigidKinematics):
                 f"The 'distance' parameter of {_OWNER} must lie in [0, {L}] for link {link}. "
                 f"Got {distance} instead."
             )
-        q = self._check_batch_q(q)
+        return link, distance
+
+    def _point_position_numpy(
+        self, q: NDArray[Any], link: int, distance: float
+    ) -> NDArray[np.float64]:
+        """The NumPy reference of :meth:`point_position` (arguments checked)."""
         phi = self.modes[link].shape(distance)[:, 0]
         S = shortening_matrix(self.modes[link], distance)[:, :, 0]
         pos = deflected_point(self.arrays, phi, np.atleast_2d(q), link, distance, S)
@@ -602,11 +541,6 @@ class FlexibleArm(RigidKinematics):
             return np.ascontiguousarray(phi)
         S = shortening_matrix(modes, distance)[:, :, 0]
         return np.ascontiguousarray(np.concatenate([phi, S.ravel()]))
-
-    def tip_position(self, q: ArrayLike) -> NDArray[np.float64]:
-        """End-effector position with deflection, shape ``(2,)`` or ``(m, 2)``, m."""
-        last = self.n_links - 1
-        return self.point_position(q, last, self.links[last].length)
 
     @property
     def link_lengths(self) -> NDArray[np.float64]:

@@ -46,6 +46,8 @@ __all__ = [
     "Workspace",
     "make_workspace",
     "pack_arm_arrays",
+    "workspace_shapes",
+    "workspace_size",
 ]
 
 F64 = NDArray[np.float64]
@@ -149,21 +151,33 @@ class Workspace(NamedTuple):
     axial: F64  # (AX_ROWS + 3 n, max(n, 3)) one link's foreshortening terms (AX_* rows)
 
 
+def workspace_shapes(n_dof: int) -> dict[str, tuple[int, ...]]:
+    """The shape of each :class:`Workspace` array for ``n_dof`` coordinates, in field
+    order (the one layout :func:`make_workspace`, the checks and the flat workspace
+    of :mod:`flexarm.model.packed` share)."""
+    n = int(n_dof)
+    return {
+        "mass": (n, n),
+        "bias": (n,),
+        "jac": (2, n),
+        "angle": (n,),
+        "rhs": (n,),
+        "rows": (3, n),
+        "lmass": (n, n),
+        "lbias": (n,),
+        "inv_diag": (n,),
+        "axial": (AX_ROWS + 3 * n, max(n, 3)),
+    }
+
+
+def workspace_size(n_dof: int) -> int:
+    """Number of float64 values in a :class:`Workspace` for ``n_dof`` coordinates."""
+    return sum(int(np.prod(shape)) for shape in workspace_shapes(n_dof).values())
+
+
 def make_workspace(n_dof: int) -> Workspace:
     """Allocate the scratch arrays for an arm with ``n_dof`` coordinates."""
-    n = int(n_dof)
-    return Workspace(
-        mass=np.zeros((n, n)),
-        bias=np.zeros(n),
-        jac=np.zeros((2, n)),
-        angle=np.zeros(n),
-        rhs=np.zeros(n),
-        rows=np.zeros((3, n)),
-        lmass=np.zeros((n, n)),
-        lbias=np.zeros(n),
-        inv_diag=np.zeros(n),
-        axial=np.zeros((AX_ROWS + 3 * n, max(n, 3))),
-    )
+    return Workspace(**{name: np.zeros(shape) for name, shape in workspace_shapes(n_dof).items()})
 
 
 def pack_arm_arrays(

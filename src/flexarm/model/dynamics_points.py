@@ -6,6 +6,7 @@ What the simulator's sensors call at every control step; the NumPy reference is
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
@@ -19,10 +20,10 @@ __all__ = ["point_kinematics"]
 F64 = NDArray[np.float64]
 
 
-@njit_runtime_free(cache=True, nogil=True)
-def _point_kinematics(
-    q: F64, dq: F64, model: ArmArrays, link: int, distance: float, phi: F64, out: F64
-) -> None:  # pragma: no cover - compiled
+@nb.njit(cache=True, nogil=True, inline="always")
+def _point_state(
+    q: F64, dq: F64, model: ArmArrays, link: int, distance: float, phi: F64
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
     """Position and velocity of a point on a link, deflection included.
 
     Parameters
@@ -38,8 +39,11 @@ def _point_kinematics(
         stiffening, followed by the shortening matrix ``S(distance)`` row by row
         (:meth:`flexarm.FlexibleArm.point_basis` builds it). Without it the
         point's own foreshortening is left out.
-    out : ndarray, shape (4,)
-        Written: ``x, y`` (m) and ``vx, vy`` (m/s) in the base frame.
+
+    Returns
+    -------
+    tuple of 4 float
+        ``x, y`` (m) and ``vx, vy`` (m/s) in the base frame.
     """
     ms = model.mode_start
     shortening = model.shortening_quartic.shape[1] > 0
@@ -97,10 +101,15 @@ def _point_kinematics(
             for r in range(a0, a1):
                 alpha += model.tip_slope[r] * q[r]
                 alpha_dot += model.tip_slope[r] * dq[r]
-    out[0] = px
-    out[1] = py
-    out[2] = vx
-    out[3] = vy
+    return px, py, vx, vy
+
+
+@njit_runtime_free(cache=True, nogil=True)
+def _point_kinematics(
+    q: F64, dq: F64, model: ArmArrays, link: int, distance: float, phi: F64, out: F64
+) -> None:  # pragma: no cover - compiled
+    """:func:`_point_state` into ``out`` (shape (4,)): ``x, y`` (m), ``vx, vy`` (m/s)."""
+    out[0], out[1], out[2], out[3] = _point_state(q, dq, model, link, distance, phi)
 
 
 def point_kinematics(

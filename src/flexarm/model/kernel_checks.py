@@ -12,14 +12,27 @@ overload. NumPy only.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
+from .._validation import check_array
 from ..errors import InvalidTypeError, InvalidValueError
-from .arrays import AX_ROWS, N_JOINT_COLUMNS, N_LINK_COLUMNS, ArmArrays, Workspace
+from .arrays import N_JOINT_COLUMNS, N_LINK_COLUMNS, ArmArrays, Workspace, workspace_shapes
 
-__all__ = ["check_model", "check_state", "check_vector", "check_workspace"]
+__all__ = [
+    "check_model",
+    "check_state",
+    "check_vector",
+    "check_workspace",
+    "checked_coordinates",
+    "checked_state",
+    "shape_message",
+    "state_shapes",
+]
+
+_OWNER = "FlexibleArm"
 
 
 def _array(value: object, name: str, owner: str, dtype: type, writable: bool) -> np.ndarray:
@@ -125,18 +138,7 @@ def check_workspace(ws: object, n: int, owner: str) -> None:
             f"The 'ws' parameter of {owner} must be a Workspace (make_workspace(n_dof)). "
             f"Got {type(ws).__name__} instead."
         )
-    shapes = {
-        "mass": (n, n),
-        "bias": (n,),
-        "jac": (2, n),
-        "angle": (n,),
-        "rhs": (n,),
-        "rows": (3, n),
-        "lmass": (n, n),
-        "lbias": (n,),
-        "inv_diag": (n,),
-        "axial": (AX_ROWS + 3 * n, max(n, 3)),
-    }
+    shapes = workspace_shapes(n)
     for field, shape in shapes.items():
         check_vector(getattr(ws, field), f"ws.{field}", owner, shape, writable=True)
 
@@ -155,3 +157,59 @@ def check_state(q: object, dq: object, tau: object, model: object, owner: str) -
     check_vector(dq, "dq", owner, (n,))
     check_vector(tau, "tau", owner, (n_links,))
     return StateShapes(n_links=n_links, n_dof=n)
+
+
+def shape_message(name: str, owner: str, want: str, got: tuple[int, ...]) -> str:
+    """The message of a wrong shape: ``want`` is the expected shape as text."""
+    return f"The '{name}' parameter of {owner} must be of shape {want}. Got shape {got} instead."
+
+
+def state_shapes(q_shape: tuple[int, ...], n_dof: int, n_links: int) -> dict[str, str]:
+    """The shape each of ``q, dq, tau`` must have, as text, given ``q``'s shape (a
+    batch when it has two dimensions)."""
+    both = f"({n_dof},) or (m, {n_dof})"
+    if len(q_shape) == 2:
+        m = q_shape[0]
+        return {"q": both, "dq": f"({m}, {n_dof})", "tau": f"({m}, {n_links})"}
+    return {"q": both, "dq": f"({n_dof},)", "tau": f"({n_links},)"}
+
+
+def checked_coordinates(
+    q: ArrayLike, n_dof: int, *, real: bool, owner: str = _OWNER
+) -> NDArray[Any]:
+    """``q`` as an array of shape ``(n_dof,)`` or ``(m, n_dof)``, finite; complex
+    kept unless ``real`` (then refused); real input as a new C-contiguous float64
+    array. InvalidTypeError / InvalidValueError naming ``q`` otherwise."""
+    arr = check_array(q, "q", owner, real=real)
+    if arr.ndim not in (1, 2) or arr.shape[-1] != n_dof:
+        raise InvalidValueError(shape_message("q", owner, f"({n_dof},) or (m, {n_dof})", arr.shape))
+    return arr if arr.dtype.kind == "c" else np.array(arr, dtype=np.float64, order="C")
+
+
+def checked_state(
+    q: ArrayLike,
+    dq: ArrayLike,
+    tau: ArrayLike,
+    n_dof: int,
+    n_links: int,
+    *,
+    real: bool,
+    owner: str = _OWNER,
+) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any]]:
+    """``q, dq`` of shape ``(n_dof,)`` and ``tau`` of shape ``(n_links,)``, or a batch
+    of them (``(m, n_dof)``, ``(m, n_dof)``, ``(m, n_links)``), all finite.
+
+    Complex values are kept unless ``real`` (then refused); real input comes back
+    as new C-contiguous float64 arrays. InvalidTypeError / InvalidValueError
+    naming the argument otherwise.
+    """
+    q = checked_coordinates(q, n_dof, real=real, owner=owner)
+    want = state_shapes(q.shape, n_dof, n_links)
+    shapes = {"dq": q.shape, "tau": (*q.shape[:-1], n_links)}
+    out = [q]
+    for name, value in (("dq", dq), ("tau", tau)):
+        arr = check_array(value, name, owner, real=real)
+        if arr.shape != shapes[name]:
+            raise InvalidValueError(shape_message(name, owner, want[name], arr.shape))
+        out.append(arr if arr.dtype.kind == "c" else np.array(arr, dtype=np.float64, order="C"))
+    return out[0], out[1], out[2]

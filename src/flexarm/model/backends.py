@@ -1,0 +1,247 @@
+"""Where a public call of :class:`flexarm.FlexibleArm` is evaluated: :class:`Backends`.
+
+:meth:`~Backends.forward_dynamics`, :meth:`~Backends.mass_matrix`,
+:meth:`~Backends.point_position` and :meth:`~Backends.tip_position` take a
+``backend``:
+
+``"compiled"``
+    The Numba kernels (:mod:`flexarm.model.dynamics`) through the arm's packed
+    form (:mod:`flexarm.model.packed`, built on first use): about a microsecond
+    a call from Python for the paper's arm, a batch of states (2-D arrays) in
+    one compiled call, the kernels' results bit for bit. Real input only.
+``"numpy"``
+    The readable NumPy reference of :mod:`flexarm.model.arm`; it also takes
+    complex input (the complex-step derivatives of ``M``).
+``"auto"`` (the default)
+    ``"compiled"`` for real input, ``"numpy"`` for complex input.
+
+C-contiguous, writable float64 arrays go straight to the compiled entry point,
+which checks their shapes and finiteness; anything else (lists, other dtypes,
+strided or read-only views) is checked and converted first
+(:func:`flexarm.model.kernel_checks.checked_state`). NumPy only: Numba is
+loaded by the first compiled call.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import check_option
+from .arrays import LEN, ArmArrays
+from .kernel_checks import checked_coordinates, checked_state
+
+if TYPE_CHECKING:  # Numba is loaded on first use of the packed arm
+    from .packed import PackedArm
+
+__all__ = ["BACKENDS", "Backends"]
+
+BACKENDS = ("auto", "compiled", "numpy")
+
+_OWNER = "FlexibleArm"
+
+
+class Backends:
+    """The public calls of :class:`flexarm.FlexibleArm` that have a compiled and a
+    NumPy backend (module docstring); a base of the arm, which supplies the
+    sizes, the packed arrays and the NumPy references."""
+
+    _derived: dict[str, Any]
+
+    @property
+    def n_dof(self) -> int:
+        raise NotImplementedError
+
+    @property
+    def n_links(self) -> int:
+        raise NotImplementedError
+
+    @property
+    def arrays(self) -> ArmArrays:
+        raise NotImplementedError
+
+    def point_basis(self, link: int, distance: float) -> NDArray[np.float64]:
+        raise NotImplementedError
+
+    def _check_point(self, link: int, distance: float) -> tuple[int, float]:
+        raise NotImplementedError
+
+    def _mass_matrix_numpy(self, q: NDArray[Any]) -> NDArray[Any]:
+        raise NotImplementedError
+
+    def _forward_dynamics_numpy(
+        self, q: NDArray[Any], dq: NDArray[Any], tau: NDArray[Any]
+    ) -> NDArray[Any]:
+        raise NotImplementedError
+
+    def _point_position_numpy(
+        self, q: NDArray[Any], link: int, distance: float
+    ) -> NDArray[np.float64]:
+        raise NotImplementedError
+
+    def _packed(self) -> PackedArm:
+        """The arm packed for cheap compiled calls from Python
+        (:mod:`flexarm.model.packed`), built on first use (which loads Numba)."""
+        packed: PackedArm | None = self._derived.get("packed")
+        if packed is None:
+            from .packed import PackedArm
+
+            last = self.n_links - 1
+            length = float(self.arrays.link[last, LEN])
+            tip = self.point_basis(last, length)
+            packed = self._derived["packed"] = PackedArm.from_arrays(self.arrays, tip)
+        return packed
+
+    def mass_matrix(self, q: ArrayLike, *, backend: str = "auto") -> NDArray[Any]:
+        """Mass matrix ``M(q)``, symmetric positive definite.
+
+        Parameters
+        ----------
+        q : array_like, shape (n_dof,) or (m, n_dof)
+            Coordinates (joint angles in rad, then modal coordinates); a 2-D
+            array is a batch of ``m`` configurations.
+        backend : {"auto", "compiled", "numpy"}
+            As for :meth:`forward_dynamics`: ``"auto"`` (default) takes the
+            compiled kernel (:func:`flexarm.model.dynamics.mass_and_bias`) for
+            real ``q`` and the NumPy reference for complex ``q`` (complex-step
+            derivatives).
+
+        Returns
+        -------
+        ndarray, shape (n_dof, n_dof) or (m, n_dof, n_dof)
+            kg m**2 for the joint angles; modal units for the modes.
+        """
+        if backend == "auto" or backend == "compiled":
+            try:
+                packed = self._derived["packed"]
+            except KeyError:
+                packed = self._packed()
+            out = packed.mass_matrix(q)
+            if out is not None:
+                return out
+        check_option(backend, "backend", _OWNER, BACKENDS)
+        q = checked_coordinates(q, self.n_dof, real=backend == "compiled")
+        if backend == "numpy" or q.dtype.kind == "c":
+            return _rows(self._mass_matrix_numpy, q)
+        return self._packed().mass_matrix(q)  # type: ignore[return-value]
+
+    def forward_dynamics(
+        self, q: ArrayLike, dq: ArrayLike, tau: ArrayLike, *, backend: str = "auto"
+    ) -> NDArray[Any]:
+        """Accelerations ``qddot = M^-1 (Q(q, dq, tau) - C dq)`` with ``Q`` from
+        :meth:`generalized_forces`.
+
+        Parameters
+        ----------
+        q, dq : array_like, shape (n_dof,) or (m, n_dof)
+            Coordinates and rates (rad, rad/s; modal units); 2-D arrays are a
+            batch of ``m`` states, evaluated in one compiled call.
+        tau : array_like, shape (n_links,) or (m, n_links)
+            Joint (motor) torques, N m.
+        backend : {"auto", "compiled", "numpy"}
+            ``"compiled"`` calls the Numba kernel
+            :func:`flexarm.model.dynamics.forward_dynamics` (compiled on first
+            use, cached on disk) through the arm's packed form
+            (:mod:`flexarm.model.packed`): about a microsecond from Python for
+            the paper's arm, equal to the kernel bit for bit; real input only.
+            ``"numpy"`` is the readable reference. ``"auto"`` (default) is
+            ``"compiled"`` for real input and ``"numpy"`` for complex input
+            (complex-step differentiation).
+
+        Returns
+        -------
+        ndarray, shape (n_dof,) or (m, n_dof)
+            rad/s**2; modal units per s**2.
+
+        Notes
+        -----
+        C-contiguous float64 arrays go straight to the kernel; anything else
+        (lists, other dtypes, strided views) is checked and converted first.
+        """
+        if backend == "auto" or backend == "compiled":
+            try:
+                packed = self._derived["packed"]
+            except KeyError:
+                packed = self._packed()
+            out = packed.forward_dynamics(q, dq, tau)
+            if out is not None:
+                return out
+        check_option(backend, "backend", _OWNER, BACKENDS)
+        n, real = self.n_dof, backend == "compiled"
+        q, dq, tau = checked_state(q, dq, tau, n, self.n_links, real=real)
+        if backend == "numpy" or "c" in (q.dtype.kind, dq.dtype.kind, tau.dtype.kind):
+            return _rows(self._forward_dynamics_numpy, q, dq, tau)
+        return self._packed().forward_dynamics(q, dq, tau)  # type: ignore[return-value]
+
+    def point_position(
+        self, q: ArrayLike, link: int, distance: float, *, backend: str = "auto"
+    ) -> NDArray[np.float64]:
+        """Position of the point ``distance`` m along link ``link``, deflection included.
+
+        Parameters
+        ----------
+        q : array_like, shape (n_dof,) or (m, n_dof)
+            One configuration or a time series of them.
+        link : int
+            0-based link index.
+        distance : float
+            Distance from the link's joint along the undeformed link, m, in
+            ``[0, L]``.
+        backend : {"auto", "compiled", "numpy"}
+            ``"compiled"`` (real ``q``; what ``"auto"`` takes for it) evaluates
+            :func:`flexarm.model.dynamics.point_kinematics` through the packed
+            arm, the point's mode shapes kept for the next call; ``"numpy"``
+            is the reference.
+
+        Returns
+        -------
+        ndarray, shape (2,) or (m, 2)
+            ``(x, y)`` in m, base frame.
+        """
+        if backend == "auto" or backend == "compiled":
+            try:
+                packed = self._derived["packed"]
+            except KeyError:
+                packed = self._packed()
+            phi = packed.bases.get((link, distance))
+            if phi is not None and type(link) is int:
+                out = packed.point_position(q, link, distance, phi)
+                if out is not None:
+                    return out
+        check_option(backend, "backend", _OWNER, BACKENDS)
+        link, distance = self._check_point(link, distance)
+        q = checked_coordinates(q, self.n_dof, real=backend == "compiled")
+        if backend == "numpy" or q.dtype.kind == "c":
+            return self._point_position_numpy(q, link, distance)
+        packed = self._packed()
+        phi = packed.bases.get((link, distance))
+        if phi is None:
+            phi = self.point_basis(link, distance)
+            packed.remember_basis(link, distance, phi)
+        return packed.point_position(q, link, distance, phi)  # type: ignore[return-value]
+
+    def tip_position(self, q: ArrayLike, *, backend: str = "auto") -> NDArray[np.float64]:
+        """End-effector position with deflection, shape ``(2,)`` or ``(m, 2)``, m
+        (:meth:`point_position` of the last link's tip; ``q`` of shape
+        ``(n_dof,)`` or ``(m, n_dof)``)."""
+        if backend == "auto" or backend == "compiled":
+            try:
+                packed = self._derived["packed"]
+            except KeyError:
+                packed = self._packed()
+            out = packed.point_position(q, packed.n_links - 1, packed.tip_distance, packed.tip)
+            if out is not None:
+                return out
+        last = self.n_links - 1
+        return self.point_position(q, last, float(self.arrays.link[last, LEN]), backend=backend)
+
+
+def _rows(fn: Callable[..., NDArray[Any]], *arrays: NDArray[Any]) -> NDArray[Any]:
+    """``fn`` of one state, or of every row of a batch stacked (the NumPy reference
+    takes one state at a time)."""
+    if arrays[0].ndim == 1:
+        return fn(*arrays)
+    return np.stack([fn(*row) for row in zip(*arrays, strict=True)])

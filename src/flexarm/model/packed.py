@@ -1,0 +1,583 @@
+"""One arm's compiled kernels behind a cheap call from Python: :class:`PackedArm`.
+
+Numba types every argument of a call from Python, some 20 ns an array. The
+kernels of :mod:`flexarm.model.dynamics` take an
+:class:`~flexarm.model.arrays.ArmArrays` (16 arrays) and a
+:class:`~flexarm.model.arrays.Workspace` (10 more), so a call from Python spends
+microseconds in dispatch before the kernel starts. :class:`PackedArm` packs an
+arm's arrays once into one float64 buffer (its sizes and ``mode_start`` first,
+as int64 bit patterns). Its compiled entry points take that buffer, a flat
+workspace, the state and the output, a few arguments of fixed types; inside
+compiled code they view the buffer as the ``ArmArrays`` and the workspace as a
+``Workspace`` again (views, no copies) and call the same kernels,
+so the results are those kernels' bit for bit.
+
+:class:`flexarm.FlexibleArm` builds its :class:`PackedArm` on first use (loading
+Numba then) and calls it from :meth:`~flexarm.FlexibleArm.forward_dynamics`,
+:meth:`~flexarm.FlexibleArm.mass_matrix`, :meth:`~flexarm.FlexibleArm.point_position`
+and :meth:`~flexarm.FlexibleArm.tip_position`. A method of :class:`PackedArm`
+returns None when its arguments are not C-contiguous, writable float64 NumPy
+arrays of one number of dimensions: the arm then checks and converts them
+(:func:`flexarm.model.kernel_checks.checked_state`) or takes its NumPy
+reference (complex input). The entry points check shapes and finiteness
+themselves, so a wrong shape never reaches a kernel.
+
+Every state may also come as a batch: ``q`` of shape ``(m, n_dof)`` is ``m``
+states evaluated in one compiled call, each exactly as a call of its own.
+
+Threads: the kernels release the GIL. The packed buffer is never written. The
+scratch is one workspace per thread and arm (``threading.local``; allocating
+one per call costs a call 4 times what fetching it does), so concurrent calls
+on one arm share nothing writable.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from dataclasses import dataclass, field
+from typing import Any
+
+import numba as nb
+import numpy as np
+from numba import types as nt
+from numba.core import cgutils
+from numba.core.imputils import impl_ret_borrowed
+from numba.extending import intrinsic
+from numba.np.arrayobj import make_array, populate_array
+from numpy.typing import NDArray
+
+from .._compile import njit_runtime_free
+from ..errors import InvalidValueError
+from .arrays import (
+    AX_ROWS,
+    LEN,
+    N_JOINT_COLUMNS,
+    N_LINK_COLUMNS,
+    ArmArrays,
+    Workspace,
+    workspace_size,
+)
+from .dynamics import _forward_dynamics, _mass_and_bias
+from .dynamics_points import _point_state
+from .dynamics_two_links import _forward_dynamics_two_links_one_mode, is_two_links_one_mode
+from .kernel_checks import shape_message, state_shapes
+
+__all__ = ["PackedArm", "pack_buffer"]
+
+F64 = NDArray[np.float64]
+
+_HEADER = 4  # n_links, n_dof, n_joints, K; then mode_start (n_links + 1), all int64
+_OWNER = "FlexibleArm"
+_STATE = ("q", "dq", "tau")
+_NDARRAY = np.ndarray
+_FLOAT64 = np.dtype(np.float64)
+_empty = np.empty  # a name lookup less than np.empty: 30 ns of a call of ~600
+
+# Status codes of the entry points: 0 is success; otherwise 1 + 2 k + kind for
+# argument k of _STATE, kind 0 a wrong shape, 1 a non-finite entry.
+_OK = 0
+
+
+def pack_buffer(arrays: ArmArrays) -> F64:
+    """``arrays`` as one float64 buffer.
+
+    Parameters
+    ----------
+    arrays : ArmArrays
+        :attr:`flexarm.FlexibleArm.arrays`.
+
+    Returns
+    -------
+    ndarray, shape (5 + n_links + size,)
+        ``n_links, n_dof, n_joints, K`` (the most modes of a link with geometric
+        stiffening) and ``mode_start`` as int64 bit patterns, then every float
+        array of ``arrays`` raveled in field order. Writable (Numba takes
+        writable arrays fastest), but never written.
+    """
+    n_links = arrays.mode_start.shape[0] - 1
+    n = arrays.mass_integral.shape[0]
+    header = [n_links, n, arrays.joint.shape[0], arrays.shortening_cubic.shape[-1]]
+    ints = np.concatenate([np.array(header, dtype=np.int64), arrays.mode_start])
+    floats = [np.ravel(getattr(arrays, f)) for f in ArmArrays._fields[1:]]
+    return np.concatenate([ints.astype(np.int64).view(np.float64), *floats])
+
+
+# ---------------------------------------------------------------- views, compiled
+@intrinsic
+def _view(typingctx: Any, buf: Any, offset: Any, shape: Any, dtype: Any) -> Any:
+    """``buf[offset:]`` viewed as a C-contiguous array of ``shape`` and ``dtype``
+    (``np.float64`` or ``np.int64``), unchecked: a view built in a few
+    instructions where ``buf[a:b].reshape(shape)`` calls a checking helper (some
+    12 ns a view, a third of a call of the paper's arm from Python). The caller
+    guarantees that ``buf`` holds ``offset + prod(shape)`` items of 8 bytes."""
+    ndim, item = len(shape), dtype.dtype
+    retty = nt.Array(item, ndim, "C")
+
+    def codegen(context: Any, builder: Any, sig: Any, args: Any) -> Any:
+        buf_v, offset_v, shape_v, _ = args
+        src = make_array(sig.args[0])(context, builder, buf_v)
+        dst = make_array(retty)(context, builder)
+        intp = context.get_value_type(nt.intp)
+        dims = [
+            builder.sext(d, intp) if d.type.width < intp.width else d
+            for d in cgutils.unpack_tuple(builder, shape_v, ndim)
+        ]
+        itemsize = context.get_abi_sizeof(context.get_data_type(item))
+        strides, step = [], context.get_constant(nt.intp, itemsize)
+        for d in reversed(dims):
+            strides.insert(0, step)
+            step = builder.mul(step, d)
+        data = builder.gep(src.data, [offset_v])
+        data = builder.bitcast(data, context.get_data_type(item).as_pointer())
+        itemsize_v = context.get_constant(nt.intp, itemsize)
+        populate_array(
+            dst, data=data, shape=dims, strides=strides, itemsize=itemsize_v, meminfo=src.meminfo
+        )
+        return impl_ret_borrowed(context, builder, retty, dst._getvalue())
+
+    return retty(buf, offset, shape, dtype), codegen
+
+
+@nb.njit(inline="always")
+def _unpack(buf: F64) -> ArmArrays:  # pragma: no cover - compiled
+    """The :class:`ArmArrays` that :func:`pack_buffer` packed, as views of ``buf``."""
+    n_links = _view(buf, 0, (1,), np.int64)[0]
+    o = _HEADER + n_links + 1
+    ints = _view(buf, 0, (o,), np.int64)
+    n, n_joints, k = ints[1], ints[2], ints[3]
+    ms = _view(buf, _HEADER, (n_links + 1,), np.int64)
+    link = _view(buf, o, (n_links, N_LINK_COLUMNS), np.float64)
+    o += n_links * N_LINK_COLUMNS
+    vectors = _view(buf, o, (4, n), np.float64)  # the four modal integrals
+    o += 4 * n
+    modal_mass = _view(buf, o, (n, n), np.float64)
+    o += n * n
+    stiffness = _view(buf, o, (n,), np.float64)
+    damping = _view(buf, o + n, (n,), np.float64)
+    payload = _view(buf, o + 2 * n, (2,), np.float64)
+    o += 2 * n + 2
+    joint = _view(buf, o, (n_joints, N_JOINT_COLUMNS), np.float64)
+    o += n_joints * N_JOINT_COLUMNS
+    shortening = _view(buf, o, (3, n, n), np.float64)  # tip, mass, moment
+    o += 3 * n * n
+    shortening_cubic = _view(buf, o, (n, k, k), np.float64)
+    o += n * k * k
+    shortening_quartic = _view(buf, o, (n, k, k, k), np.float64)
+    return ArmArrays(
+        ms,
+        link,
+        vectors[0],
+        vectors[1],
+        vectors[2],
+        vectors[3],
+        modal_mass,
+        stiffness,
+        damping,
+        payload,
+        joint,
+        shortening[0],
+        shortening[1],
+        shortening[2],
+        shortening_cubic,
+        shortening_quartic,
+    )
+
+
+@nb.njit(inline="always")
+def _sizes(buf: F64) -> tuple[int, int]:  # pragma: no cover - compiled
+    """``(n_links, n_dof)`` of the packed arm."""
+    ints = _view(buf, 0, (2,), np.int64)
+    return ints[0], ints[1]
+
+
+@nb.njit(inline="always")
+def _workspace(wbuf: F64, n: int, mass: F64) -> Workspace:  # pragma: no cover - compiled
+    """``wbuf`` viewed as the :class:`Workspace` of :func:`flexarm.model.arrays.make_workspace`
+    (the layout of :func:`flexarm.model.arrays.workspace_shapes`), with ``mass``
+    (n, n) in place of its first array."""
+    o = n * n
+    bias = _view(wbuf, o, (n,), np.float64)
+    o += n
+    jac = _view(wbuf, o, (2, n), np.float64)
+    o += 2 * n
+    angle = _view(wbuf, o, (n,), np.float64)
+    o += n
+    rhs = _view(wbuf, o, (n,), np.float64)
+    o += n
+    rows = _view(wbuf, o, (3, n), np.float64)
+    o += 3 * n
+    lmass = _view(wbuf, o, (n, n), np.float64)
+    o += n * n
+    lbias = _view(wbuf, o, (n,), np.float64)
+    o += n
+    inv_diag = _view(wbuf, o, (n,), np.float64)
+    o += n
+    axial = _view(wbuf, o, (AX_ROWS + 3 * n, max(n, 3)), np.float64)
+    return Workspace(mass, bias, jac, angle, rhs, rows, lmass, lbias, inv_diag, axial)
+
+
+@nb.njit(inline="always")
+def _own_mass(wbuf: F64, n: int) -> F64:  # pragma: no cover - compiled
+    """The first ``n * n`` values of ``wbuf``: the workspace's own ``mass`` (n, n)."""
+    return _view(wbuf, 0, (n, n), np.float64)
+
+
+@nb.njit(inline="always")
+def _check(x: F64, n: int, arg: int) -> int:  # pragma: no cover - compiled
+    """Status of one vector argument: shape ``(n,)`` and finite entries."""
+    if x.shape[0] != n:
+        return 1 + 2 * arg
+    for r in range(n):
+        if not math.isfinite(x[r]):
+            return 2 + 2 * arg
+    return _OK
+
+
+@nb.njit(inline="always")
+def _check_rows(x: F64, m: int, n: int, arg: int) -> int:  # pragma: no cover - compiled
+    """Status of one batch argument: shape ``(m, n)`` and finite entries."""
+    if x.shape[0] != m or x.shape[1] != n:
+        return 1 + 2 * arg
+    for b in range(m):
+        for r in range(n):
+            if not math.isfinite(x[b, r]):
+                return 2 + 2 * arg
+    return _OK
+
+
+@nb.njit(inline="always")
+def _check_state(q: F64, dq: F64, tau: F64, buf: F64) -> int:  # pragma: no cover - compiled
+    """Status of a state: ``q, dq`` of shape (n_dof,), ``tau`` (n_links,), finite."""
+    n_links, n = _sizes(buf)
+    status = _check(q, n, 0)
+    if status == _OK:
+        status = _check(dq, n, 1)
+    if status == _OK:
+        status = _check(tau, n_links, 2)
+    return status
+
+
+@nb.njit(inline="always")
+def _check_states(q: F64, dq: F64, tau: F64, buf: F64) -> int:  # pragma: no cover - compiled
+    """:func:`_check_state` for a batch: ``(m, n_dof)``, ``(m, n_dof)``, ``(m, n_links)``."""
+    n_links, n = _sizes(buf)
+    m = q.shape[0]
+    status = _check_rows(q, m, n, 0)
+    if status == _OK:
+        status = _check_rows(dq, m, n, 1)
+    if status == _OK:
+        status = _check_rows(tau, m, n_links, 2)
+    return status
+
+
+# --------------------------------------------------------------- entry points
+_F1 = nt.Array(nt.float64, 1, "C")
+_F2 = nt.Array(nt.float64, 2, "C")
+_F3 = nt.Array(nt.float64, 3, "C")
+_R1 = nt.Array(nt.float64, 1, "C", readonly=True)
+_ENTRY = {"cache": True, "nogil": True}
+
+
+@njit_runtime_free([nt.int64(_F1, _F1, _F1, _F1, _F1)], **_ENTRY)
+def _scalar_dynamics(
+    buf: F64, q: F64, dq: F64, tau: F64, out: F64
+) -> int:  # pragma: no cover - compiled
+    """The paper's structure (two links, one mode each, rigid joints): the scalar
+    kernel that :func:`flexarm.model.dynamics.forward_dynamics` takes for it, into
+    ``out``; no workspace. Returns a status code (0: done)."""
+    status = _check_state(q, dq, tau, buf)
+    if status == _OK:
+        _forward_dynamics_two_links_one_mode(q, dq, tau, _unpack(buf), out)
+    return status
+
+
+@njit_runtime_free([nt.int64(_F1, _F2, _F2, _F2, _F2)], **_ENTRY)
+def _scalar_dynamics_batch(
+    buf: F64, q: F64, dq: F64, tau: F64, out: F64
+) -> int:  # pragma: no cover - compiled
+    """:func:`_scalar_dynamics` for every row of ``q, dq, tau`` into ``out``."""
+    status = _check_states(q, dq, tau, buf)
+    if status == _OK:
+        model = _unpack(buf)
+        for b in range(q.shape[0]):
+            _forward_dynamics_two_links_one_mode(q[b], dq[b], tau[b], model, out[b])
+    return status
+
+
+@njit_runtime_free([nt.int64(_F1, _F1, _F1, _F1, _F1, _F1)], **_ENTRY)
+def _dynamics(
+    buf: F64, wbuf: F64, q: F64, dq: F64, tau: F64, out: F64
+) -> int:  # pragma: no cover - compiled
+    """:func:`flexarm.model.dynamics.forward_dynamics` of the packed arm into ``out``,
+    ``wbuf`` its workspace; returns a status code (0: done)."""
+    status = _check_state(q, dq, tau, buf)
+    if status == _OK:
+        n = q.shape[0]
+        ws = _workspace(wbuf, n, _own_mass(wbuf, n))
+        _forward_dynamics(q, dq, tau, _unpack(buf), ws, out)
+    return status
+
+
+@njit_runtime_free([nt.int64(_F1, _F1, _F2, _F2, _F2, _F2)], **_ENTRY)
+def _dynamics_batch(
+    buf: F64, wbuf: F64, q: F64, dq: F64, tau: F64, out: F64
+) -> int:  # pragma: no cover - compiled
+    """:func:`_dynamics` for every row of ``q, dq, tau`` into ``out``."""
+    status = _check_states(q, dq, tau, buf)
+    if status == _OK:
+        n = q.shape[1]
+        model, ws = _unpack(buf), _workspace(wbuf, n, _own_mass(wbuf, n))
+        for b in range(q.shape[0]):
+            _forward_dynamics(q[b], dq[b], tau[b], model, ws, out[b])
+    return status
+
+
+@njit_runtime_free([nt.int64(_F1, _F1, _F1, _F2)], **_ENTRY)
+def _mass_matrix(buf: F64, wbuf: F64, q: F64, out: F64) -> int:  # pragma: no cover - compiled
+    """``M(q)`` of :func:`flexarm.model.dynamics.mass_and_bias` into ``out`` (n, n)."""
+    n = _sizes(buf)[1]
+    status = _check(q, n, 0)
+    if status == _OK:
+        _mass_and_bias(q, q, _unpack(buf), _workspace(wbuf, n, out))  # M needs no dq
+    return status
+
+
+@njit_runtime_free([nt.int64(_F1, _F1, _F2, _F3)], **_ENTRY)
+def _mass_matrix_batch(buf: F64, wbuf: F64, q: F64, out: F64) -> int:  # pragma: no cover - compiled
+    """:func:`_mass_matrix` for every row of ``q`` into ``out`` (m, n, n)."""
+    n, m = _sizes(buf)[1], q.shape[0]
+    status = _check_rows(q, m, n, 0)
+    if status == _OK:
+        model = _unpack(buf)
+        for b in range(m):
+            _mass_and_bias(q[b], q[b], model, _workspace(wbuf, n, out[b]))
+    return status
+
+
+@njit_runtime_free([nt.int64(_F1, _F1, nt.int64, nt.float64, _R1, _F1)], **_ENTRY)
+def _point(
+    buf: F64, q: F64, link: int, distance: float, phi: F64, out: F64
+) -> int:  # pragma: no cover - compiled
+    """Position of the point ``distance`` along ``link`` (basis ``phi``) into ``out`` (2,)."""
+    status = _check(q, _sizes(buf)[1], 0)
+    if status == _OK:
+        px, py, _, _ = _point_state(q, q, _unpack(buf), link, distance, phi)
+        out[0] = px
+        out[1] = py
+    return status
+
+
+@njit_runtime_free([nt.int64(_F1, _F2, nt.int64, nt.float64, _R1, _F2)], **_ENTRY)
+def _point_batch(
+    buf: F64, q: F64, link: int, distance: float, phi: F64, out: F64
+) -> int:  # pragma: no cover - compiled
+    """:func:`_point` for every row of ``q`` into ``out`` (m, 2)."""
+    m = q.shape[0]
+    status = _check_rows(q, m, _sizes(buf)[1], 0)
+    if status == _OK:
+        model = _unpack(buf)
+        for b in range(m):
+            px, py, _, _ = _point_state(q[b], q[b], model, link, distance, phi)
+            out[b, 0] = px
+            out[b, 1] = py
+    return status
+
+
+@nb.njit
+def _unpacked(buf: F64) -> ArmArrays:  # pragma: no cover - compiled
+    """:func:`_unpack` as a function (with the refcount runtime), for tests."""
+    return _unpack(buf)
+
+
+# ------------------------------------------------------------------ the object
+@dataclass(frozen=True, eq=False)
+class PackedArm:
+    """An arm packed for cheap compiled calls from Python (module docstring).
+
+    Build it with :meth:`from_arrays`; :class:`flexarm.FlexibleArm` keeps one.
+
+    Attributes
+    ----------
+    buf : ndarray, shape (size,)
+        The arm (:func:`pack_buffer`); never written.
+    n_links, n_dof : int
+    scalar : bool
+        Whether the arm takes the scalar kernel of two links with one mode each
+        (which needs no workspace).
+    tip : ndarray
+        The last tip's basis (:meth:`flexarm.FlexibleArm.point_basis`).
+    tip_distance : float
+        Length of the last link, m.
+    bases : dict
+        Memo of point bases ``(link, distance) -> phi`` that the arm fills, at
+        most :attr:`MAX_BASES` (the oldest goes first).
+    """
+
+    buf: F64
+    n_links: int
+    n_dof: int
+    scalar: bool
+    tip: F64
+    tip_distance: float
+    bases: dict[tuple[int, float], F64] = field(default_factory=dict, repr=False)
+    _local: threading.local = field(default_factory=threading.local, repr=False)
+
+    MAX_BASES = 64
+
+    @classmethod
+    def from_arrays(cls, arrays: ArmArrays, tip: F64) -> PackedArm:
+        """Pack ``arrays`` (:attr:`flexarm.FlexibleArm.arrays`); ``tip`` is the last
+        link's basis at its tip (:meth:`flexarm.FlexibleArm.point_basis`)."""
+        n_links, n = arrays.mode_start.shape[0] - 1, arrays.mass_integral.shape[0]
+        scalar = is_two_links_one_mode(arrays)
+        length = float(arrays.link[n_links - 1, LEN])
+        return cls(pack_buffer(arrays), n_links, n, scalar, _frozen(tip), length)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # a threading.local does not pickle: a copy starts with no workspaces
+        fields = (self.buf, self.n_links, self.n_dof, self.scalar, self.tip, self.tip_distance)
+        return (type(self), fields)
+
+    def remember_basis(self, link: int, distance: float, phi: F64) -> None:
+        """Keep ``phi`` as the basis of the point ``(link, distance)``."""
+        if len(self.bases) >= self.MAX_BASES:
+            self.bases.pop(next(iter(self.bases)), None)
+        self.bases[(link, distance)] = _frozen(phi)
+
+    def _workspace(self) -> F64:
+        """This thread's workspace for this arm (allocated on its first call)."""
+        try:
+            return self._local.wbuf  # type: ignore[no-any-return]
+        except AttributeError:
+            wbuf = self._local.wbuf = np.zeros(workspace_size(self.n_dof))
+            return wbuf
+
+    # ----------------------------------------------------------------- calls
+    def forward_dynamics(self, q: object, dq: object, tau: object) -> F64 | None:
+        """``qddot`` of :func:`flexarm.model.dynamics.forward_dynamics`.
+
+        Parameters
+        ----------
+        q, dq : ndarray, shape (n_dof,) or (m, n_dof)
+            Coordinates and rates (rad, rad/s; modal units), float64.
+        tau : ndarray, shape (n_links,) or (m, n_links)
+            Joint (motor) torques, N m, float64.
+
+        Returns
+        -------
+        ndarray, shape (n_dof,) or (m, n_dof), or None
+            The accelerations (rad/s**2; modal units); None if the arguments
+            are not C-contiguous, writable float64 NumPy arrays of one number
+            of dimensions (1 or 2).
+
+        Raises
+        ------
+        InvalidValueError
+            Naming the argument of a wrong shape or with non-finite entries.
+        """
+        if not (type(q) is _NDARRAY and type(dq) is _NDARRAY and type(tau) is _NDARRAY):
+            return None
+        if not (q.dtype is _FLOAT64 and dq.dtype is _FLOAT64 and tau.dtype is _FLOAT64):
+            return None
+        try:
+            if q.ndim == 1:
+                out = _empty(self.n_dof)
+                if self.scalar:
+                    status = _scalar_dynamics(self.buf, q, dq, tau, out)
+                else:
+                    status = _dynamics(self.buf, self._workspace(), q, dq, tau, out)
+            else:
+                out = _empty((q.shape[0], self.n_dof))
+                if self.scalar:
+                    status = _scalar_dynamics_batch(self.buf, q, dq, tau, out)
+                else:
+                    status = _dynamics_batch(self.buf, self._workspace(), q, dq, tau, out)
+        except TypeError:  # dimensions differ, a strided or read-only array: convert
+            return None
+        if status:
+            self._fail(status, q, dq, tau)
+        return out
+
+    def mass_matrix(self, q: object) -> F64 | None:
+        """``M(q)`` of :func:`flexarm.model.dynamics.mass_and_bias`.
+
+        Parameters
+        ----------
+        q : ndarray, shape (n_dof,) or (m, n_dof)
+            Coordinates, float64.
+
+        Returns
+        -------
+        ndarray, shape (n_dof, n_dof) or (m, n_dof, n_dof), or None
+            kg m**2 (modal units); None if ``q`` is not a C-contiguous, writable
+            float64 NumPy array of 1 or 2 dimensions.
+        """
+        if type(q) is not _NDARRAY or q.dtype is not _FLOAT64:
+            return None
+        n = self.n_dof
+        try:
+            if q.ndim == 1:
+                out = _empty((n, n))
+                status = _mass_matrix(self.buf, self._workspace(), q, out)
+            else:
+                out = _empty((q.shape[0], n, n))
+                status = _mass_matrix_batch(self.buf, self._workspace(), q, out)
+        except TypeError:
+            return None
+        if status:
+            self._fail(status, q)
+        return out
+
+    def point_position(self, q: object, link: int, distance: float, phi: F64) -> F64 | None:
+        """Position of the point ``distance`` m along ``link`` (0-based).
+
+        Parameters
+        ----------
+        q : ndarray, shape (n_dof,) or (m, n_dof)
+            Coordinates, float64.
+        link : int
+        distance : float
+            m; checked by the caller (``0 <= distance <= L``).
+        phi : ndarray
+            The point's basis (:meth:`flexarm.FlexibleArm.point_basis`).
+
+        Returns
+        -------
+        ndarray, shape (2,) or (m, 2), or None
+            ``(x, y)`` in m, base frame; None if ``q`` is not a C-contiguous,
+            writable float64 NumPy array of 1 or 2 dimensions.
+        """
+        if type(q) is not _NDARRAY or q.dtype is not _FLOAT64:
+            return None
+        try:
+            if q.ndim == 1:
+                out = _empty(2)
+                status = _point(self.buf, q, link, distance, phi, out)
+            else:
+                out = _empty((q.shape[0], 2))
+                status = _point_batch(self.buf, q, link, distance, phi, out)
+        except TypeError:
+            return None
+        if status:
+            self._fail(status, q)
+        return out
+
+    def _fail(self, status: int, *state: NDArray[np.float64]) -> None:
+        """Raise the error that ``status`` stands for (``state``: the arguments)."""
+        k, kind = divmod(status - 1, 2)
+        name = _STATE[k]
+        if kind == 1:
+            raise InvalidValueError(
+                f"The '{name}' parameter of {_OWNER} must be finite (no NaN or inf). "
+                "Got non-finite entries instead."
+            )
+        want = state_shapes(state[0].shape, self.n_dof, self.n_links)[name]
+        raise InvalidValueError(shape_message(name, _OWNER, want, state[k].shape))
+
+
+def _frozen(phi: F64) -> F64:
+    """A read-only C-contiguous float64 copy of ``phi``."""
+    arr = np.array(phi, dtype=np.float64, order="C")
+    arr.flags.writeable = False
+    return arr
