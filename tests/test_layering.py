@@ -51,6 +51,7 @@ WITHIN: dict[str, list[str]] = {
         "kinematics",
         "lagrangian",
         "dynamics_foreshortening",
+        "dynamics_recursive",
         "dynamics_points",
         "dynamics_two_links",
         "dynamics",

@@ -117,6 +117,7 @@ def _workspace_shapes(wbuf, n):  # pragma: no cover - compiled
         ws.lbias.shape,
         ws.inv_diag.shape,
         ws.axial.shape,
+        ws.chain.shape,
     )
 
 

@@ -25,6 +25,19 @@ __all__ = [
     "AX_TIP",
     "AX_WALPHA",
     "AX_Y",
+    "CH_AD",
+    "CH_COS",
+    "CH_CX",
+    "CH_CY",
+    "CH_D",
+    "CH_E",
+    "CH_EX",
+    "CH_IAH",
+    "CH_LT",
+    "CH_SIN",
+    "CH_U",
+    "CH_Z",
+    "CH_ZB",
     "HUB_MASS",
     "INERTIA",
     "J_A1",
@@ -39,6 +52,7 @@ __all__ = [
     "J_KSW",
     "LEN",
     "MASS",
+    "N_CHAIN_COLUMNS",
     "N_JOINT_COLUMNS",
     "N_LINK_COLUMNS",
     "STATIC",
@@ -69,6 +83,18 @@ AX_BETA = 5  # added to beta_ux, beta_uy, beta_alpha
 AX_BETA_MODES = 6  # added to beta_delta
 AX_ROWS = 7
 AX_Q = AX_ROWS  # then K rows of Q, K rows of R, K rows of Q~ (K = n_dof)
+# Columns of Workspace.chain, the recursive algorithm's records (flexarm.model.dynamics_recursive).
+# Row i < n_links (joint i) holds link i's; row g of a modal coordinate holds that mode's.
+CH_AD = 0  # absolute angular rate of link i, rad/s
+CH_COS, CH_SIN = 1, 2  # cos, sin of the angle from link i-1's frame to link i's
+CH_IAH = 3  # 3 columns: the articulated inertia of link i's subtree times the joint axis
+CH_D, CH_U = 6, 7  # its pivot (inertia about joint i) and the joint's force less the bias
+CH_LT, CH_E = 8, 9  # the tip of link i in its frame, m
+CH_CX, CH_CY = 10, 11  # velocity-dependent acceleration of the tip relative to its joint
+N_CHAIN_COLUMNS = 12
+CH_Z = 0  # modal rows, 3 columns: K_dd^-1 K_da (the mode's answer to its frame's acceleration)
+CH_ZB = 3  # K_dd^-1 (Q_delta - k_delta): the mode's acceleration at zero frame acceleration
+CH_EX = 4  # the tip's axial velocity per unit mode rate (foreshortening), m
 
 
 class ArmArrays(NamedTuple):
@@ -135,8 +161,10 @@ class Workspace(NamedTuple):
     """Scratch arrays for one thread of kernel calls (``n = n_dof``).
 
     ``mass`` and ``bias`` hold :func:`mass_and_bias`'s results in the order of
-    ``q``; the other arrays are scratch of the solver, which works in the
-    link-major order of :func:`local_order`.
+    ``q``; the other arrays are scratch of the solvers: the dense one works in
+    the link-major order of :func:`local_order`, the recursive one
+    (:mod:`flexarm.model.dynamics_recursive`) keeps its records in ``chain``
+    and each link's modal block in ``lmass``.
     """
 
     mass: F64  # (n, n) M(q), order of q
@@ -149,6 +177,7 @@ class Workspace(NamedTuple):
     lbias: F64  # (n,) C(q, dq) dq, then the right-hand side and solution, local order
     inv_diag: F64  # (n,) reciprocal pivots of the LDL' factor
     axial: F64  # (AX_ROWS + 3 n, max(n, 3)) one link's foreshortening terms (AX_* rows)
+    chain: F64  # (n, N_CHAIN_COLUMNS) the recursive algorithm's records (CH_* columns)
 
 
 def workspace_shapes(n_dof: int) -> dict[str, tuple[int, ...]]:
@@ -167,6 +196,7 @@ def workspace_shapes(n_dof: int) -> dict[str, tuple[int, ...]]:
         "lbias": (n,),
         "inv_diag": (n,),
         "axial": (AX_ROWS + 3 * n, max(n, 3)),
+        "chain": (n, N_CHAIN_COLUMNS),
     }
 
 

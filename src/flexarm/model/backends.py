@@ -116,7 +116,7 @@ class Backends:
         """
         if backend == "auto" or backend == "compiled":
             try:
-                packed = self._derived["packed"]
+                packed: PackedArm = self._derived["packed"]
             except KeyError:
                 packed = self._packed()
             out = packed.mass_matrix(q)
@@ -163,7 +163,7 @@ class Backends:
         """
         if backend == "auto" or backend == "compiled":
             try:
-                packed = self._derived["packed"]
+                packed: PackedArm = self._derived["packed"]
             except KeyError:
                 packed = self._packed()
             out = packed.forward_dynamics(q, dq, tau)
@@ -203,7 +203,7 @@ class Backends:
         """
         if backend == "auto" or backend == "compiled":
             try:
-                packed = self._derived["packed"]
+                packed: PackedArm = self._derived["packed"]
             except KeyError:
                 packed = self._packed()
             phi = packed.bases.get((link, distance))
@@ -229,7 +229,7 @@ class Backends:
         ``(n_dof,)`` or ``(m, n_dof)``)."""
         if backend == "auto" or backend == "compiled":
             try:
-                packed = self._derived["packed"]
+                packed: PackedArm = self._derived["packed"]
             except KeyError:
                 packed = self._packed()
             out = packed.point_position(q, packed.n_links - 1, packed.tip_distance, packed.tip)

@@ -12,11 +12,21 @@ link ``i`` in its clamped frame is ``1/2 nu' Mb(delta) nu`` with body velocity
 the velocity terms ``h = C(q, qdot) qdot = sum Jb' beta`` with ``beta`` the
 body-frame inertial force at ``qddot = 0``.
 
-The kernels work in a link-major order of the coordinates (:func:`local_order`:
-joint 1, link 1's modes, joint 2, ...), in which each link's body Jacobian is
-zero beyond a prefix; they form only the lower triangle of ``M`` and solve with
-an ``L D L'`` factorisation. The paper's structure (two links, one mode each,
-rigid joints) has the same computation written out in scalars.
+Three algorithms compute ``qddot``; :func:`forward_dynamics` takes the fastest
+for the arm's structure:
+
+* the dense kernel (:func:`forward_dynamics_dense`) works in a link-major order
+  of the coordinates (:func:`local_order`: joint 1, link 1's modes, joint 2,
+  ...), in which each link's body Jacobian is zero beyond a prefix; it forms
+  only the lower triangle of ``M`` and solves with an ``L D L'``
+  factorisation. Its cost grows as the cube of the number of links;
+* the recursive kernel (:func:`forward_dynamics_recursive`,
+  :mod:`flexarm.model.dynamics_recursive`) is the articulated-body algorithm
+  on the same body terms, linear in the number of links. From
+  :data:`RECURSIVE_FROM_LINKS` links on it is the faster (BENCHMARKS.md, "Cost
+  growth"), and :func:`forward_dynamics_general` takes it there;
+* the paper's structure (two links, one mode each, rigid joints) has the dense
+  computation written out in scalars.
 """
 
 from __future__ import annotations
@@ -56,6 +66,7 @@ from .arrays import (
 )
 from .dynamics_foreshortening import link_foreshortening
 from .dynamics_points import point_kinematics
+from .dynamics_recursive import _accelerations_recursive
 from .dynamics_two_links import (
     _forward_dynamics_two_links_one_mode,
     _is_two_links_one_mode,
@@ -66,11 +77,14 @@ from .dynamics_two_links import (
 from .kernel_checks import check_model, check_state, check_vector, check_workspace
 
 __all__ = [
+    "RECURSIVE_FROM_LINKS",
     "ArmArrays",
     "Workspace",
     "accelerations_two_links_one_mode",
     "forward_dynamics",
+    "forward_dynamics_dense",
     "forward_dynamics_general",
+    "forward_dynamics_recursive",
     "forward_dynamics_two_links_one_mode",
     "is_two_links_one_mode",
     "joint_forces",
@@ -81,6 +95,10 @@ __all__ = [
 ]
 
 F64 = NDArray[np.float64]
+
+RECURSIVE_FROM_LINKS = 3
+"""Arms with this many links or more take the recursive algorithm (measured,
+BENCHMARKS.md "Cost growth"); fewer links, the dense one."""
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -387,26 +405,35 @@ def _mass_and_bias(
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _forward_dynamics_general(
-    q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
+def _generalized_forces(
+    q: F64, dq: F64, tau: F64, model: ArmArrays, rhs: F64
 ) -> None:  # pragma: no cover - compiled
-    """:func:`forward_dynamics` for any structure (links, modes, joints).
-
-    Assembles the lower triangle of ``M`` and ``C dq`` in the local order
-    (:func:`_assemble_local`), forms the right-hand side there and solves with
-    an ``L D L'`` factorisation; the parameters are those of
-    :func:`forward_dynamics`.
-    """
-    _assemble_local(q, dq, model, ws)
-    n = q.shape[0]
-    rhs = ws.rhs
-    for r in range(n):
+    """The generalised forces other than inertia into ``rhs`` (order of ``q``):
+    ``B tau - K q - D dq`` and the flexible joints' forces."""
+    for r in range(q.shape[0]):
         rhs[r] = -model.stiffness[r] * q[r] - model.damping[r] * dq[r]
     if model.joint.shape[0] > 0:
         _joint_forces(q, dq, tau, model, rhs)
     else:
         for r in range(tau.shape[0]):
             rhs[r] += tau[r]
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _forward_dynamics_dense(
+    q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
+) -> None:  # pragma: no cover - compiled
+    """:func:`forward_dynamics` for any structure by the mass matrix (the dense kernel).
+
+    Assembles the lower triangle of ``M`` and ``C dq`` in the local order
+    (:func:`_assemble_local`), forms the right-hand side there and solves with
+    an ``L D L'`` factorisation; the parameters are those of
+    :func:`forward_dynamics`.
+    """
+    _generalized_forces(q, dq, tau, model, ws.rhs)
+    _assemble_local(q, dq, model, ws)
+    n = q.shape[0]
+    rhs = ws.rhs
     y = ws.lbias  # C dq, then the right-hand side, then the solution (local order)
     ms = model.mode_start
     n_links = ms.shape[0] - 1
@@ -429,15 +456,47 @@ def _forward_dynamics_general(
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
+def _forward_dynamics_recursive(
+    q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
+) -> None:  # pragma: no cover - compiled
+    """:func:`forward_dynamics` for any structure by the articulated-body recursion
+    (:mod:`flexarm.model.dynamics_recursive`), in time linear in the links."""
+    _generalized_forces(q, dq, tau, model, ws.rhs)
+    _accelerations_recursive(q, dq, model, ws, ddq)
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _prefers_recursive(model: ArmArrays) -> bool:  # pragma: no cover - compiled
+    """Whether the recursive algorithm is the faster for this structure: from
+    RECURSIVE_FROM_LINKS links on (BENCHMARKS.md, "Cost growth")."""
+    return bool(model.link.shape[0] >= RECURSIVE_FROM_LINKS)
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _forward_dynamics_general(
+    q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
+) -> None:  # pragma: no cover - compiled
+    """:func:`forward_dynamics` for any structure: :func:`_forward_dynamics_recursive`
+    or :func:`_forward_dynamics_dense`, whichever is the faster for it
+    (:func:`_prefers_recursive`); the parameters are those of
+    :func:`forward_dynamics`."""
+    if _prefers_recursive(model):
+        _forward_dynamics_recursive(q, dq, tau, model, ws, ddq)
+    else:
+        _forward_dynamics_dense(q, dq, tau, model, ws, ddq)
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
 def _forward_dynamics(
     q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
 ) -> None:  # pragma: no cover - compiled
     """``ddq = M(q)^-1 (B tau - C(q, dq) dq - K q - D dq + joint forces)``, into ``ddq``.
 
     Two links with one mode each and rigid joints (the paper's structure) take
-    the scalar kernel :func:`forward_dynamics_two_links_one_mode`; every other
-    arm :func:`forward_dynamics_general`. Both compute the same quantities in
-    the same order.
+    the scalar kernel :func:`forward_dynamics_two_links_one_mode`, which
+    computes the dense kernel's quantities in the same order; every other arm
+    :func:`forward_dynamics_general` (the dense kernel up to two links, the
+    recursive one from :data:`RECURSIVE_FROM_LINKS` on).
 
     Parameters
     ----------
@@ -493,12 +552,37 @@ def forward_dynamics(q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace,
 def forward_dynamics_general(
     q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
 ) -> None:
-    """:func:`forward_dynamics` by the general kernel for any structure (checked)."""
+    """:func:`forward_dynamics` by the general kernels for any structure, the dense
+    or the recursive one, whichever is the faster for it (checked)."""
     owner = "forward_dynamics_general"
     _, n = check_state(q, dq, tau, model, owner)
     check_workspace(ws, n, owner)
     check_vector(ddq, "ddq", owner, (n,), writable=True)
     _forward_dynamics_general(q, dq, tau, model, ws, ddq)
+
+
+def forward_dynamics_dense(
+    q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
+) -> None:
+    """:func:`forward_dynamics` by the mass matrix and its factorisation, for any
+    structure (checked)."""
+    owner = "forward_dynamics_dense"
+    _, n = check_state(q, dq, tau, model, owner)
+    check_workspace(ws, n, owner)
+    check_vector(ddq, "ddq", owner, (n,), writable=True)
+    _forward_dynamics_dense(q, dq, tau, model, ws, ddq)
+
+
+def forward_dynamics_recursive(
+    q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64
+) -> None:
+    """:func:`forward_dynamics` by the articulated-body recursion
+    (:mod:`flexarm.model.dynamics_recursive`), for any structure (checked)."""
+    owner = "forward_dynamics_recursive"
+    _, n = check_state(q, dq, tau, model, owner)
+    check_workspace(ws, n, owner)
+    check_vector(ddq, "ddq", owner, (n,), writable=True)
+    _forward_dynamics_recursive(q, dq, tau, model, ws, ddq)
 
 
 def mass_and_bias(q: F64, dq: F64, model: ArmArrays, ws: Workspace) -> None:
@@ -527,6 +611,18 @@ def _forward_dynamics_compiled(q, dq, tau, model, ws, ddq):  # type: ignore[no-u
 @compiled_as(forward_dynamics_general)
 def _forward_dynamics_general_compiled(q, dq, tau, model, ws, ddq):  # type: ignore[no-untyped-def]
     return lambda q, dq, tau, model, ws, ddq: _forward_dynamics_general(q, dq, tau, model, ws, ddq)
+
+
+@compiled_as(forward_dynamics_dense)
+def _forward_dynamics_dense_compiled(q, dq, tau, model, ws, ddq):  # type: ignore[no-untyped-def]
+    return lambda q, dq, tau, model, ws, ddq: _forward_dynamics_dense(q, dq, tau, model, ws, ddq)
+
+
+@compiled_as(forward_dynamics_recursive)
+def _forward_dynamics_recursive_compiled(q, dq, tau, model, ws, ddq):  # type: ignore[no-untyped-def]
+    return lambda q, dq, tau, model, ws, ddq: _forward_dynamics_recursive(
+        q, dq, tau, model, ws, ddq
+    )
 
 
 @compiled_as(mass_and_bias)

@@ -52,6 +52,7 @@ from ..errors import InvalidValueError
 from .arrays import (
     AX_ROWS,
     LEN,
+    N_CHAIN_COLUMNS,
     N_JOINT_COLUMNS,
     N_LINK_COLUMNS,
     ArmArrays,
@@ -104,39 +105,43 @@ def pack_buffer(arrays: ArmArrays) -> F64:
 
 
 # ---------------------------------------------------------------- views, compiled
-@intrinsic
-def _view(typingctx: Any, buf: Any, offset: Any, shape: Any, dtype: Any) -> Any:
-    """``buf[offset:]`` viewed as a C-contiguous array of ``shape`` and ``dtype``
-    (``np.float64`` or ``np.int64``), unchecked: a view built in a few
+def _view_typing(typingctx, buf, offset, shape, dtype):  # type: ignore[no-untyped-def]
+    """The typing and code of :func:`_view`: ``buf[offset:]`` viewed as a
+    C-contiguous array of ``shape`` and ``dtype`` (``np.float64`` or
+    ``np.int64``), unchecked: a view built in a few
     instructions where ``buf[a:b].reshape(shape)`` calls a checking helper (some
     12 ns a view, a third of a call of the paper's arm from Python). The caller
     guarantees that ``buf`` holds ``offset + prod(shape)`` items of 8 bytes."""
     ndim, item = len(shape), dtype.dtype
     retty = nt.Array(item, ndim, "C")
 
-    def codegen(context: Any, builder: Any, sig: Any, args: Any) -> Any:
+    def codegen(context, builder, sig, args):  # type: ignore[no-untyped-def]
         buf_v, offset_v, shape_v, _ = args
-        src = make_array(sig.args[0])(context, builder, buf_v)
-        dst = make_array(retty)(context, builder)
+        src = make_array(sig.args[0])(context, builder, buf_v)  # type: ignore[no-untyped-call]
+        dst = make_array(retty)(context, builder)  # type: ignore[no-untyped-call]
         intp = context.get_value_type(nt.intp)
         dims = [
             builder.sext(d, intp) if d.type.width < intp.width else d
-            for d in cgutils.unpack_tuple(builder, shape_v, ndim)
+            for d in cgutils.unpack_tuple(builder, shape_v, ndim)  # type: ignore[no-untyped-call]
         ]
         itemsize = context.get_abi_sizeof(context.get_data_type(item))
-        strides, step = [], context.get_constant(nt.intp, itemsize)
+        strides: list[Any] = []
+        step = context.get_constant(nt.intp, itemsize)
         for d in reversed(dims):
             strides.insert(0, step)
             step = builder.mul(step, d)
         data = builder.gep(src.data, [offset_v])
         data = builder.bitcast(data, context.get_data_type(item).as_pointer())
         itemsize_v = context.get_constant(nt.intp, itemsize)
-        populate_array(
+        populate_array(  # type: ignore[no-untyped-call]
             dst, data=data, shape=dims, strides=strides, itemsize=itemsize_v, meminfo=src.meminfo
         )
-        return impl_ret_borrowed(context, builder, retty, dst._getvalue())
+        return impl_ret_borrowed(context, builder, retty, dst._getvalue())  # type: ignore[no-untyped-call]
 
     return retty(buf, offset, shape, dtype), codegen
+
+
+_view: Any = intrinsic(_view_typing)
 
 
 @nb.njit(inline="always")
@@ -214,13 +219,16 @@ def _workspace(wbuf: F64, n: int, mass: F64) -> Workspace:  # pragma: no cover -
     inv_diag = _view(wbuf, o, (n,), np.float64)
     o += n
     axial = _view(wbuf, o, (AX_ROWS + 3 * n, max(n, 3)), np.float64)
-    return Workspace(mass, bias, jac, angle, rhs, rows, lmass, lbias, inv_diag, axial)
+    o += (AX_ROWS + 3 * n) * max(n, 3)
+    chain = _view(wbuf, o, (n, N_CHAIN_COLUMNS), np.float64)
+    return Workspace(mass, bias, jac, angle, rhs, rows, lmass, lbias, inv_diag, axial, chain)
 
 
 @nb.njit(inline="always")
 def _own_mass(wbuf: F64, n: int) -> F64:  # pragma: no cover - compiled
     """The first ``n * n`` values of ``wbuf``: the workspace's own ``mass`` (n, n)."""
-    return _view(wbuf, 0, (n, n), np.float64)
+    mass: F64 = _view(wbuf, 0, (n, n), np.float64)
+    return mass
 
 
 @nb.njit(inline="always")
