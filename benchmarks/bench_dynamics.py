@@ -1,14 +1,17 @@
-"""Per-call cost of flexarm's forward dynamics, beside Pinocchio's ``aba``.
+"""Per-call cost of flexarm's dynamics from compiled code and from Python, beside
+Pinocchio; and how the cost grows with the number of links and of modes.
 
 Run from the repository root::
 
-    python benchmarks/bench_dynamics.py                 # table
+    python benchmarks/bench_dynamics.py                 # both sections, a table
     python benchmarks/bench_dynamics.py --json          # machine-readable
+    python benchmarks/bench_dynamics.py --section calls # or: --section growth
     python benchmarks/bench_dynamics.py --repeat 7 --calls 2000000
 
-What is timed, per arm (rigid two-link, the paper's arm with one and with two
-modes per link, with and without flexible joints, and a user-built arm with three
-and five clamped-mass modes per link with and without geometric stiffening):
+Section "calls". What is timed, per arm (rigid two-link, the paper's arm with one
+and with two modes per link, with and without flexible joints, and a user-built
+arm with three and five clamped-mass modes per link with and without geometric
+stiffening):
 
 ``kernel, compiled loop``
     :func:`flexarm.model.dynamics.forward_dynamics` called ``--calls`` times from a
@@ -29,14 +32,32 @@ and five clamped-mass modes per link with and without geometric stiffening):
     structure saves.
 ``kernel, Python call``
     The same kernel called from a Python ``for`` loop with a preallocated
-    workspace: Numba's dispatch overhead included.
-``arm.forward_dynamics compiled`` / ``numpy``
-    The public method with ``backend="compiled"`` (argument checks, a fresh
-    workspace per call) and ``backend="numpy"`` (the reference).
+    workspace: Numba's dispatch of the ~26 arrays of ``ArmArrays`` and
+    ``Workspace`` included (the way the public method called it before the
+    packed arm).
+``arm.forward_dynamics`` / ``arm.mass_matrix`` / ``arm.tip_position``
+    The public methods with their default backend: for real float64 input, the
+    packed arm (:mod:`flexarm.model.packed`), checks and a new output array
+    included.
+``arm.forward_dynamics numpy``
+    ``backend="numpy"``, the reference.
+``arm.forward_dynamics, batch``
+    ``arm.forward_dynamics`` on ``(4096, n_dof)`` arrays (one compiled call); the
+    table gives the time per state.
 
-The peer is Pinocchio's ``aba`` on the rigid two-link arm with the same
-parameters, called from a Python loop exactly like ``kernel, Python call``
-(``pip install pin``; skipped with a note if it is not importable).
+The peers are Pinocchio's ``aba``, ``crba`` and ``forwardKinematics`` on the rigid
+two-link arm with the same parameters, called from a Python loop exactly like
+the flexarm rows (``pip install pin``; skipped with a note if it is not
+importable). The ratios divide by ``aba`` measured in the same process.
+
+Section "growth". One forward-dynamics call from 4 to 64 coordinates, along three
+lines: more rigid links, more links of one mode each (and of three modes with
+geometric stiffening, the default of an arm you build), and more modes on two
+links. Per arm: the dense kernel (mass matrix and ``L D L'``) and the recursive
+kernel (articulated-body, :mod:`flexarm.model.dynamics_recursive`), both as
+``kernel, dependent calls``; ``arm.forward_dynamics`` from Python (the kernel the
+arm chooses); and Pinocchio's ``aba`` from Python on a rigid chain with as many
+joints as the arm has coordinates. Growth exponents are log-log slopes.
 
 Every measurement is warmed up first (JIT compilation excluded); each repeat
 times a whole batch with ``time.perf_counter_ns``; the table gives the best and
@@ -177,13 +198,22 @@ def _make_chained_driver(kernel: Any) -> Any:
 
 _chained = _make_chained_driver(dynamics.forward_dynamics)
 _chained_general = _make_chained_driver(dynamics.forward_dynamics_general)
+_chained_dense = _make_chained_driver(dynamics.forward_dynamics_dense)
+_chained_recursive = _make_chained_driver(dynamics.forward_dynamics_recursive)
+_DEPENDENT = {
+    "dependent": _chained,
+    "dependent-general": _chained_general,
+    "dependent-dense": _chained_dense,
+    "dependent-recursive": _chained_recursive,
+}
 
 
 def bench_compiled_loop(
     arm: FlexibleArm, states: tuple, calls: int, repeat: int, driver: str = "independent"
 ) -> dict:
     """``calls`` kernel calls per batch from a compiled driver: ``driver`` is
-    ``"independent"``, ``"dependent"`` or ``"dependent-general"``."""
+    ``"independent"`` or one of the dependent drivers (``"dependent"``,
+    ``"dependent-general"``, ``"dependent-dense"``, ``"dependent-recursive"``)."""
     Q, DQ, TAU = states
     model, ws, ddq = arm.arrays, dynamics.make_workspace(arm.n_dof), np.zeros(arm.n_dof)
     qs = np.zeros(arm.n_dof)
@@ -192,10 +222,8 @@ def bench_compiled_loop(
     def batch() -> int:
         if driver == "independent":
             sink.append(_driver(Q, DQ, TAU, model, ws, ddq, calls))
-        elif driver == "dependent":
-            sink.append(_chained(Q, DQ, TAU, model, ws, ddq, qs, calls))
         else:
-            sink.append(_chained_general(Q, DQ, TAU, model, ws, ddq, qs, calls))
+            sink.append(_DEPENDENT[driver](Q, DQ, TAU, model, ws, ddq, qs, calls))
         return calls
 
     res = measure(batch, repeat)
@@ -239,55 +267,76 @@ def bench_python_harness(rows: list, calls: int, repeat: int) -> dict:
 
 
 # ------------------------------------------------------------------ the peer
-def pinocchio_rigid_arm(pin: Any) -> tuple[Any, Any]:
-    """Pinocchio model of the rigid two-link arm: revolute-z joints, each link a uniform
-    rod of length ``LENGTH`` and mass ``RHO * LENGTH`` along its x axis; no gravity."""
-    m = RHO * LENGTH
-    i_c = m * LENGTH**2 / 12.0  # rod inertia about its centre (y and z axes)
-    inertia = pin.Inertia(m, np.array([LENGTH / 2.0, 0.0, 0.0]), np.diag([0.0, i_c, i_c]))
+def pinocchio_rigid_arm(pin: Any, n_joints: int = 2, length: float = LENGTH) -> tuple[Any, Any]:
+    """Pinocchio model of a rigid planar chain of ``n_joints`` links: revolute-z joints,
+    each link a uniform rod of ``length`` (m) and mass ``RHO * length`` along its x
+    axis, the next joint at its tip; no gravity."""
+    m = RHO * length
+    i_c = m * length**2 / 12.0  # rod inertia about its centre (y and z axes)
+    inertia = pin.Inertia(m, np.array([length / 2.0, 0.0, 0.0]), np.diag([0.0, i_c, i_c]))
     model = pin.Model()
     model.gravity = pin.Motion.Zero()
-    j1 = model.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "joint1")
-    model.appendBodyToJoint(j1, inertia, pin.SE3.Identity())
-    at_tip = pin.SE3(np.eye(3), np.array([LENGTH, 0.0, 0.0]))
-    j2 = model.addJoint(j1, pin.JointModelRZ(), at_tip, "joint2")
-    model.appendBodyToJoint(j2, inertia, pin.SE3.Identity())
+    parent, place = 0, pin.SE3.Identity()
+    at_tip = pin.SE3(np.eye(3), np.array([length, 0.0, 0.0]))
+    for k in range(n_joints):
+        parent = model.addJoint(parent, pin.JointModelRZ(), place, f"joint{k + 1}")
+        model.appendBodyToJoint(parent, inertia, pin.SE3.Identity())
+        place = at_tip
     return model, model.createData()
 
 
 def check_pinocchio(pin: Any, arm: FlexibleArm, model: Any, data: Any, rng) -> float:
-    """Largest |q̈_pinocchio - q̈_flexarm| (numpy backend) over a few random states."""
-    err = 0.0
+    """Largest |q̈_pinocchio - q̈_flexarm| / max(1, |q̈|) (flexarm's default backend) over
+    a few random states of the rigid chain ``arm``."""
+    err, n = 0.0, arm.n_links
     for _ in range(5):
-        q = rng.uniform(-np.pi, np.pi, 2)
-        v = rng.uniform(-2.0, 2.0, 2)
-        tau = rng.uniform(-5.0, 5.0, 2)
+        q = rng.uniform(-np.pi, np.pi, n)
+        v = rng.uniform(-2.0, 2.0, n)
+        tau = rng.uniform(-5.0, 5.0, n)
         a_pin = np.asarray(pin.aba(model, data, q, v, tau))
-        a_fa = arm.forward_dynamics(q, v, tau, backend="numpy")
-        err = max(err, float(np.max(np.abs(a_pin - a_fa))))
+        a_fa = arm.forward_dynamics(q, v, tau)
+        err = max(err, float(np.max(np.abs(a_pin - a_fa)) / max(1.0, np.max(np.abs(a_fa)))))
     return err
 
 
-# ----------------------------------------------------------------- machine
-# -------------------------------------------------------------------- main
-def run(calls: int, repeat: int, log: Callable[[str], None]) -> dict[str, Any]:
-    try:
-        import pinocchio as pin
-    except ImportError as exc:
-        pin = None
-        log(f"pinocchio not importable ({exc}); skipping the peer (pip install pin)")
+def bench_pinocchio(pin: Any, model: Any, data: Any, rows: list, calls: int, repeat: int) -> dict:
+    """``aba``, ``crba`` and ``forwardKinematics`` of ``model`` from a Python loop."""
+    aba, crba, fk = pin.aba, pin.crba, pin.forwardKinematics
 
+    def aba_call(q, v, tau, model=model, data=data):
+        aba(model, data, q, v, tau)
+
+    def crba_call(q, v, tau, model=model, data=data):
+        crba(model, data, q)
+
+    def fk_call(q, v, tau, model=model, data=data):
+        fk(model, data, q)
+
+    return {
+        "pin.aba": bench_python_loop(aba_call, rows, calls, repeat),
+        "pin.crba": bench_python_loop(crba_call, rows, calls, repeat),
+        "pin.forwardKinematics": bench_python_loop(fk_call, rows, calls, repeat),
+    }
+
+
+# -------------------------------------------------------------- section: calls
+BATCH = 4096  # states of the batch row (a multiple of N_STATES)
+
+
+def bench_calls(
+    pin: Any, calls: int, repeat: int, rng, log: Callable[[str], None], out: dict[str, Any]
+) -> None:
+    """The section "calls" (module docstring) into ``out``."""
     py_calls = max(N_PY_STATES, calls // 20)
     np_calls = max(N_PY_STATES, calls // 500)
-    rng = np.random.default_rng(SEED)
-    out: dict[str, Any] = {"machine": machine_info(pinocchio=pin), "results": {}, "checks": {}}
     out["settings"] = {
         "calls_compiled_loop": calls,
         "calls_python": py_calls,
         "calls_numpy": np_calls,
+        "batch": BATCH,
         "repeat": repeat,
     }
-    res = out["results"]
+    res = out["results"] = {}
     arms = make_arms()
     for label, arm in arms.items():
         log(f"timing {label} ...")
@@ -296,29 +345,43 @@ def run(calls: int, repeat: int, log: Callable[[str], None]) -> dict[str, Any]:
         model, ws, ddq = arm.arrays, dynamics.make_workspace(arm.n_dof), np.empty(arm.n_dof)
 
         # the compiled kernel agrees with the NumPy reference on these states, norm-wise
-        # (a small component of a large q̈ carries the rounding of the large ones)
-        err = 0.0
+        # (a small component of a large q̈ carries the rounding of the large ones), and
+        # the public method with the kernel bit for bit
+        err, same = 0.0, True
         for q0, dq0, tau0 in rows[:16]:
             dynamics.forward_dynamics(q0, dq0, tau0, model, ws, ddq)
             ref = arm.forward_dynamics(q0, dq0, tau0, backend="numpy")
             err = max(err, float(np.max(np.abs(ddq - ref)) / max(1.0, np.max(np.abs(ref)))))
+            same = same and bool(np.array_equal(arm.forward_dynamics(q0, dq0, tau0), ddq))
         out["checks"][f"{label}: kernel vs numpy (max rel err)"] = err
+        out["checks"][f"{label}: arm.forward_dynamics == kernel (1 if bit for bit)"] = 0.0 + (
+            not same
+        )
 
         def kernel_call(q, dq, tau, model=model, ws=ws, ddq=ddq):
             dynamics.forward_dynamics(q, dq, tau, model, ws, ddq)
 
-        def method(backend, arm=arm):
-            return lambda q, dq, tau: arm.forward_dynamics(q, dq, tau, backend=backend)
+        fd, mm, tip = arm.forward_dynamics, arm.mass_matrix, arm.tip_position
+        big = tuple(np.concatenate([x] * (BATCH // N_STATES)) for x in states)
+
+        def batch(fd=fd, big=big) -> int:
+            fd(*big)
+            return BATCH
 
         res[label] = {
             "kernel, compiled loop": bench_compiled_loop(arm, states, calls, repeat),
             "kernel, dependent calls": bench_compiled_loop(arm, states, calls, repeat, "dependent"),
             "kernel, Python call": bench_python_loop(kernel_call, rows, py_calls, repeat),
-            "arm.forward_dynamics compiled": bench_python_loop(
-                method("compiled"), rows, py_calls, repeat
+            "arm.forward_dynamics": bench_python_loop(fd, rows, py_calls, repeat),
+            "arm.mass_matrix": bench_python_loop(
+                lambda q, dq, tau, mm=mm: mm(q), rows, py_calls, repeat
             ),
+            "arm.tip_position": bench_python_loop(
+                lambda q, dq, tau, tip=tip: tip(q), rows, py_calls, repeat
+            ),
+            "arm.forward_dynamics, batch": measure(batch, repeat),
             "arm.forward_dynamics numpy": bench_python_loop(
-                method("numpy"), rows, np_calls, repeat
+                lambda q, dq, tau, fd=fd: fd(q, dq, tau, backend="numpy"), rows, np_calls, repeat
             ),
         }
         if dynamics.is_two_links_one_mode(model):
@@ -330,23 +393,140 @@ def run(calls: int, repeat: int, log: Callable[[str], None]) -> dict[str, Any]:
     log("timing the Python loop harness ...")
     rows = _py_rows(random_states(arms[rigid], N_STATES, rng))
     out["python_harness"] = bench_python_harness(rows, py_calls, repeat)
-    if pin is not None:
-        log("timing pinocchio aba ...")
-        model, data = pinocchio_rigid_arm(pin)
-        err = check_pinocchio(pin, arms[rigid], model, data, rng)
-        out["checks"]["pinocchio aba vs flexarm rigid numpy (max abs err)"] = err
-        aba = pin.aba
+    if pin is None:
+        return
+    log("timing pinocchio ...")
+    model, data = pinocchio_rigid_arm(pin)
+    out["checks"]["pinocchio aba vs flexarm rigid (max rel err)"] = check_pinocchio(
+        pin, arms[rigid], model, data, rng
+    )
+    out["pinocchio_rigid"] = bench_pinocchio(pin, model, data, rows, py_calls, repeat)
+    anchor = out["pinocchio_rigid"]["pin.aba"]
+    ratios: dict[str, dict[str, float]] = {}
+    for label, r in res.items():
+        ratios[label] = {
+            what: r[what][stat] / anchor[stat]
+            for what in (
+                "kernel, compiled loop",
+                "kernel, Python call",
+                "arm.forward_dynamics",
+                "arm.mass_matrix",
+                "arm.tip_position",
+            )
+            for stat in ("best_ns",)
+        }
+        ratios[label]["arm.forward_dynamics (median / median)"] = (
+            r["arm.forward_dynamics"]["median_ns"] / anchor["median_ns"]
+        )
+    out["ratios_to_aba"] = ratios
 
-        def aba_call(q, v, tau, model=model, data=data):
-            aba(model, data, q, v, tau)
 
-        out["pinocchio_aba_rigid"] = bench_python_loop(aba_call, rows, py_calls, repeat)
-        anchor = out["pinocchio_aba_rigid"]["best_ns"]
-        ratios: dict[str, float] = {}
-        for label, r in res.items():
-            ratios[f"{label}: compiled loop / aba"] = r["kernel, compiled loop"]["best_ns"] / anchor
-            ratios[f"{label}: Python call / aba"] = r["kernel, Python call"]["best_ns"] / anchor
-        out["ratios_best"] = ratios
+# ------------------------------------------------------------- section: growth
+GROWTH_REACH = 9.0  # m: every chain of the growth section spans the paper's two links
+
+
+def growth_arms() -> dict[str, list[FlexibleArm]]:
+    """The growth section's series, each from 4 to 64 coordinates."""
+
+    def chain(n_links: int, modes: int, stiffening: bool) -> FlexibleArm:
+        link = Link(GROWTH_REACH / n_links, EI, RHO, n_modes=modes)
+        return FlexibleArm([link] * n_links, geometric_stiffening=stiffening)
+
+    return {
+        "rigid links": [chain(n, 0, False) for n in (4, 8, 16, 32, 64)],
+        "links of 1 mode": [chain(n, 1, False) for n in (2, 4, 8, 16, 32)],
+        "links of 3 modes, stiffening": [chain(n, 3, True) for n in (1, 2, 4, 8, 16)],
+        "2 links, modes": [chain(2, m, False) for m in (1, 3, 7, 15, 31)],
+    }
+
+
+def slope(xs: list[int], ys: list[float]) -> float:
+    """Least-squares slope of log y against log x: the growth exponent."""
+    return float(np.polyfit(np.log(xs), np.log(ys), 1)[0])
+
+
+def bench_growth(
+    pin: Any, calls: int, repeat: int, rng, log: Callable[[str], None], out: dict[str, Any]
+) -> None:
+    """The section "growth" (module docstring) into ``out``."""
+    res: dict[str, list[dict[str, Any]]] = {}
+    for series, arms in growth_arms().items():
+        res[series] = []
+        for arm in arms:
+            n = arm.n_dof
+            log(f"growth: {series}, {arm.n_links} links x {arm.n_modes[0]} modes (n_dof {n}) ...")
+            states = random_states(arm, N_STATES, rng)
+            rows = _py_rows(states)
+            k_calls = max(500, calls // (4 * n))  # the kernels' batches shrink as they slow
+            p_calls = max(N_PY_STATES, calls // (20 * n))
+            q0, dq0, tau0 = rows[0]
+            d, r = np.empty(n), np.empty(n)
+            dynamics.forward_dynamics_dense(
+                q0, dq0, tau0, arm.arrays, dynamics.make_workspace(n), d
+            )
+            dynamics.forward_dynamics_recursive(
+                q0, dq0, tau0, arm.arrays, dynamics.make_workspace(n), r
+            )
+            row: dict[str, Any] = {
+                "n_links": arm.n_links,
+                "n_modes": arm.n_modes[0],
+                "n_dof": n,
+                "recursive vs dense (max rel err)": float(
+                    np.max(np.abs(r - d)) / max(1.0, np.max(np.abs(d)))
+                ),
+                "dense kernel": bench_compiled_loop(
+                    arm, states, k_calls, repeat, "dependent-dense"
+                ),
+                "recursive kernel": bench_compiled_loop(
+                    arm, states, k_calls, repeat, "dependent-recursive"
+                ),
+                "arm.forward_dynamics": bench_python_loop(
+                    arm.forward_dynamics, rows, p_calls, repeat
+                ),
+            }
+            if pin is not None:
+                model, data = pinocchio_rigid_arm(pin, n, GROWTH_REACH / n)
+                chain_rows = _py_rows(random_states(_rigid_chain(n), N_STATES, rng))
+                row["pin.aba, rigid chain"] = bench_python_loop(
+                    lambda q, v, tau, model=model, data=data: pin.aba(model, data, q, v, tau),
+                    chain_rows,
+                    p_calls,
+                    repeat,
+                )
+                row["pin.aba vs flexarm rigid chain (max rel err)"] = check_pinocchio(
+                    pin, _rigid_chain(n), model, data, rng
+                )
+            res[series].append(row)
+    out["growth"] = res
+    exponents: dict[str, dict[str, float]] = {}
+    for series, rows_ in res.items():
+        xs = [row["n_links"] if series != "2 links, modes" else row["n_dof"] for row in rows_]
+        exponents[series] = {
+            what: slope(xs, [row[what]["best_ns"] for row in rows_])
+            for what in rows_[0]
+            if isinstance(rows_[0][what], dict)
+        }
+    out["growth_exponents"] = exponents
+
+
+def _rigid_chain(n: int) -> FlexibleArm:
+    """flexarm's rigid chain of ``n`` links spanning GROWTH_REACH (Pinocchio's twin)."""
+    return FlexibleArm([Link(GROWTH_REACH / n, EI, RHO, n_modes=0)] * n)
+
+
+# -------------------------------------------------------------------- main
+def run(calls: int, repeat: int, section: str, log: Callable[[str], None]) -> dict[str, Any]:
+    try:
+        import pinocchio as pin
+    except ImportError as exc:
+        pin = None
+        log(f"pinocchio not importable ({exc}); skipping the peer (pip install pin)")
+    rng = np.random.default_rng(SEED)
+    out: dict[str, Any] = {"machine": machine_info(pinocchio=pin), "checks": {}}
+    if section in ("all", "calls"):
+        bench_calls(pin, calls, repeat, rng, log, out)
+    if section in ("all", "growth"):
+        bench_growth(pin, calls, repeat, rng, log, out)
     out["machine"]["loadavg_at_end"] = list(os.getloadavg())
     return out
 
@@ -355,50 +535,83 @@ def _fmt(ns: float) -> str:
     return f"{ns / 1000:.3f} µs" if ns >= 1000 else f"{ns:.0f} ns"
 
 
-def print_report(out: dict[str, Any]) -> None:
-    m = out["machine"]
-    print_machine(m, "pinocchio")
+def print_calls(out: dict[str, Any]) -> None:
     s = out["settings"]
     print(
         f"calls per batch: compiled loop {s['calls_compiled_loop']}, Python "
-        f"{s['calls_python']}, numpy {s['calls_numpy']}; {s['repeat']} batches"
+        f"{s['calls_python']}, numpy {s['calls_numpy']}, batch row {s['batch']} states; "
+        f"{s['repeat']} batches"
     )
     print()
-    w = 32
-    print(f"{'arm':<{w}} {'what':<31} {'best / call':>12} {'median / call':>14}")
-    print("-" * (w + 60))
+    w = 48
+    print(f"{'arm':<{w}} {'what':<34} {'best / call':>12} {'median / call':>14}")
+    print("-" * (w + 62))
     for label, r in out["results"].items():
         for what, t in r.items():
-            print(f"{label:<{w}} {what:<31} {_fmt(t['best_ns']):>12} {_fmt(t['median_ns']):>14}")
-    if "pinocchio_aba_rigid" in out:
-        t = out["pinocchio_aba_rigid"]
-        name = "rigid 2-link (pinocchio)"
+            unit = " per state" if what.endswith("batch") else ""
+            print(
+                f"{label:<{w}} {what + unit:<34} {_fmt(t['best_ns']):>12} "
+                f"{_fmt(t['median_ns']):>14}"
+            )
+    for what, t in out.get("pinocchio_rigid", {}).items():
         print(
-            f"{name:<{w}} {'pin.aba, Python call':<31} "
+            f"{'rigid 2-link (pinocchio)':<{w}} {what + ', Python call':<34} "
             f"{_fmt(t['best_ns']):>12} {_fmt(t['median_ns']):>14}"
         )
     t = out["python_harness"]
     print(
-        f"{'(none)':<{w}} {'Python loop harness alone':<31} "
+        f"{'(none)':<{w}} {'Python loop harness alone':<34} "
         f"{_fmt(t['best_ns']):>12} {_fmt(t['median_ns']):>14}"
     )
     print()
-    if "ratios_best" in out:
-        print("ratios (best / best):")
-        for k, v in out["ratios_best"].items():
-            print(f"  {k:<55} {v:6.2f}")
-    else:
-        print("pinocchio not installed: no ratios")
+    for label, r in out["results"].items():
+        per_state = r["arm.forward_dynamics, batch"]["best_ns"]
+        print(f"  batch: {label:<{w}} {1e9 / per_state:12.3g} states/s (best)")
     print()
+    if "ratios_to_aba" not in out:
+        print("pinocchio not installed: no ratios")
+        return
+    print("ratios to pin.aba from Python (best / best, same process):")
+    whats = list(next(iter(out["ratios_to_aba"].values())))
+    print(f"  {'arm':<{w}} " + " ".join(f"{k[:22]:>22}" for k in whats))
+    for label, r in out["ratios_to_aba"].items():
+        print(f"  {label:<{w}} " + " ".join(f"{r[k]:22.2f}" for k in whats))
+
+
+def print_growth(out: dict[str, Any]) -> None:
+    print("growth: best ns per call (kernels: dependent calls; Python: public call)")
+    for series, rows in out["growth"].items():
+        print(f"  {series}")
+        whats = [k for k in rows[0] if isinstance(rows[0][k], dict)]
+        print(f"    {'links x modes':>14} {'n_dof':>5} " + " ".join(f"{k[:24]:>24}" for k in whats))
+        for row in rows:
+            lm = f"{row['n_links']} x {row['n_modes']}"
+            print(
+                f"    {lm:>14} {row['n_dof']:>5} "
+                + " ".join(f"{_fmt(row[k]['best_ns']):>24}" for k in whats)
+            )
+        ex = out["growth_exponents"][series]
+        x = "n_dof" if series == "2 links, modes" else "n_links"
+        print(f"    {'exponent in ' + x:>20} " + " ".join(f"{ex[k]:24.2f}" for k in whats))
+
+
+def print_report(out: dict[str, Any]) -> None:
+    print_machine(out["machine"], "pinocchio")
+    if "results" in out:
+        print_calls(out)
+        print()
+    if "growth" in out:
+        print_growth(out)
+        print()
     print(f"checks (tolerance {CHECK_TOL:.0e}):")
     for k, v in out["checks"].items():
-        print(f"  {k:<60} {v:.2e}  {'ok' if v <= CHECK_TOL else 'MISMATCH'}")
-    print()
-    print("target <= 1 µs per call (compiled loop, best):")
-    for label, r in out["results"].items():
-        if "paper" in label:
-            best = r["kernel, compiled loop"]["best_ns"]
-            print(f"  {label:<32} {_fmt(best):>10}  {'met' if best <= 1000 else 'NOT met'}")
+        print(f"  {k:<72} {v:.2e}  {'ok' if v <= CHECK_TOL else 'MISMATCH'}")
+    for series, rows in out.get("growth", {}).items():
+        for row in rows:
+            for k, v in row.items():
+                if k.endswith("(max rel err)"):
+                    ok = "ok" if v <= CHECK_TOL else "MISMATCH"
+                    print(f"  {series}, n_dof {row['n_dof']}: {k:<48} {v:.2e}  {ok}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -409,8 +622,9 @@ def main(argv: list[str] | None = None) -> int:
         type=int,
         default=1_000_000,
         help="kernel calls per batch in the compiled loop; Python-level loops make "
-        "calls/20 and the numpy backend calls/500",
+        "calls/20 and the numpy backend calls/500 (the growth section divides by n_dof too)",
     )
+    p.add_argument("--section", choices=("all", "calls", "growth"), default="all")
     p.add_argument("--json", action="store_true", help="print the results as JSON only")
     args = p.parse_args(argv)
     if args.repeat < 1 or args.calls < 1:
@@ -419,7 +633,7 @@ def main(argv: list[str] | None = None) -> int:
     def log(msg: str) -> None:
         print(msg, file=sys.stderr, flush=True)
 
-    out = run(args.calls, args.repeat, log)
+    out = run(args.calls, args.repeat, args.section, log)
     if args.json:
         print(json.dumps(out, indent=2))
     else:

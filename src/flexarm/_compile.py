@@ -41,7 +41,7 @@ def njit_runtime_free(*signatures: Any, **options: Any) -> Callable[[_Fn], _Fn]:
     return decorator
 
 
-def compiled_as(public: Callable[..., Any]) -> Callable[[_Fn], _Fn]:
+def compiled_as(public: Callable[..., Any], *, runtime_free: bool = False) -> Callable[[_Fn], _Fn]:
     """Register the decorated function as ``public``'s implementation inside compiled
     code (a Numba ``overload``, cached and without the GIL; not inlined, which links
     the kernel into a user's function in about a second instead of re-optimising it
@@ -54,9 +54,17 @@ def compiled_as(public: Callable[..., Any]) -> Callable[[_Fn], _Fn]:
         @compiled_as(forward_dynamics)
         def _(q, dq, tau, model, ws, ddq):
             return lambda q, dq, tau, model, ws, ddq: _forward_dynamics(q, dq, tau, model, ws, ddq)
+
+    With ``runtime_free`` the implementation is compiled without the refcount
+    runtime (:func:`njit_runtime_free`; for kernels that allocate nothing): its
+    array arguments then cross the call without atomic incref/decref pairs,
+    which otherwise cost a kernel of ~30 arrays hundreds of ns a call whenever
+    LLVM does not inline it into its caller.
     """
     from numba.extending import overload
 
     options: Any = {"cache": True, "nogil": True}  # numba's stub lists no "cache"
+    if runtime_free:
+        options.update(RUNTIME_FREE)
     register: Callable[[_Fn], _Fn] = overload(public, jit_options=options)
     return register

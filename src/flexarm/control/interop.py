@@ -3,7 +3,8 @@
 :func:`to_nlsys` gives the plant ``x' = f(x, u)``, ``x = (q, dq)``, ``u`` the joint
 torques (N m), as python-control's ``nlsys`` with named signals, its update
 function calling the compiled dynamics (:func:`flexarm.model.dynamics.forward_dynamics`)
-with a workspace allocated once. It simulates with
+through the arm's packed form (:mod:`flexarm.model.packed`: about a microsecond a
+call, a workspace per thread). It simulates with
 ``control.input_output_response`` and linearises with ``control.linearize``;
 the linearised arm at rest is also :func:`flexarm.control.linearize.linearize`
 (``.to_control()`` gives it as ``control.ss`` with the same signal names), so the
@@ -33,7 +34,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_option
 from ..errors import InvalidTypeError
-from ..model.arrays import make_workspace
 from ..model.plant import Plant, check_plant
 
 if TYPE_CHECKING:
@@ -86,15 +86,16 @@ def to_nlsys(
     control.NonlinearIOSystem
         States ``(q, dq)`` (shape (2 n_dof,), rad, modal units and their
         rates), inputs the joint torques (N m, shape (n_links,)), continuous
-        time. The update function evaluates the compiled dynamics into a
-        preallocated workspace; it returns a new array each call (the
-        integrator keeps them).
+        time. The update function evaluates the compiled dynamics through the
+        packed arm (:class:`flexarm.model.packed.PackedArm`, built once here);
+        it returns a new array each call (the integrator keeps them) and keeps
+        no state between calls, so one system may run in several threads.
     """
     try:
         import control
     except ImportError as exc:  # pragma: no cover - depends on the environment
         raise ImportError("to_nlsys needs python-control: pip install 'flexarm[control]'") from exc
-    from ..model.dynamics import forward_dynamics
+    from ..model.packed import PackedArm
 
     arm = check_plant(arm, _OWNER)
     if not isinstance(name, str):
@@ -103,17 +104,15 @@ def to_nlsys(
         )
     states, inputs, outputs = signal_names(arm, output)
     n, n_links = arm.n_dof, arm.n_links
-    model = arm.arrays
-    ws = make_workspace(n)
-    tau = np.zeros(n_links)
+    packed = PackedArm.from_arrays(arm.arrays)
 
     def update(t: float, x: ArrayLike, u: ArrayLike, params: object = None) -> F64:
-        xs = np.ascontiguousarray(x, dtype=np.float64)
+        xs = np.array(x, dtype=np.float64)  # a C-contiguous, writable copy
+        tau = np.empty(n_links)
         tau[:] = np.ravel(u)
-        dx = np.empty(2 * n)
-        dx[:n] = xs[n:]
-        forward_dynamics(xs[:n], xs[n:], tau, model, ws, dx[n:])
-        return dx
+        ddq = packed.forward_dynamics(xs[:n], xs[n:], tau)
+        assert ddq is not None  # float64 C-contiguous arrays always take the compiled call
+        return np.concatenate((xs[n:], ddq))
 
     def out(t: float, x: ArrayLike, u: ArrayLike, params: object = None) -> F64:
         xs = np.asarray(x, dtype=np.float64)

@@ -232,9 +232,11 @@ class Backends:
                 packed: PackedArm = self._derived["packed"]
             except KeyError:
                 packed = self._packed()
-            out = packed.point_position(q, packed.n_links - 1, packed.tip_distance, packed.tip)
-            if out is not None:
-                return out
+            tip = packed.tip
+            if tip is not None:
+                out = packed.point_position(q, packed.n_links - 1, packed.tip_distance, tip)
+                if out is not None:
+                    return out
         last = self.n_links - 1
         return self.point_position(q, last, float(self.arrays.link[last, LEN]), backend=backend)
 

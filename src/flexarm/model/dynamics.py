@@ -603,33 +603,33 @@ def joint_forces(q: F64, dq: F64, tau: F64, model: ArmArrays, rhs: F64) -> None:
     _joint_forces(q, dq, tau, model, rhs)
 
 
-@compiled_as(forward_dynamics)
+@compiled_as(forward_dynamics, runtime_free=True)
 def _forward_dynamics_compiled(q, dq, tau, model, ws, ddq):  # type: ignore[no-untyped-def]
     return lambda q, dq, tau, model, ws, ddq: _forward_dynamics(q, dq, tau, model, ws, ddq)
 
 
-@compiled_as(forward_dynamics_general)
+@compiled_as(forward_dynamics_general, runtime_free=True)
 def _forward_dynamics_general_compiled(q, dq, tau, model, ws, ddq):  # type: ignore[no-untyped-def]
     return lambda q, dq, tau, model, ws, ddq: _forward_dynamics_general(q, dq, tau, model, ws, ddq)
 
 
-@compiled_as(forward_dynamics_dense)
+@compiled_as(forward_dynamics_dense, runtime_free=True)
 def _forward_dynamics_dense_compiled(q, dq, tau, model, ws, ddq):  # type: ignore[no-untyped-def]
     return lambda q, dq, tau, model, ws, ddq: _forward_dynamics_dense(q, dq, tau, model, ws, ddq)
 
 
-@compiled_as(forward_dynamics_recursive)
+@compiled_as(forward_dynamics_recursive, runtime_free=True)
 def _forward_dynamics_recursive_compiled(q, dq, tau, model, ws, ddq):  # type: ignore[no-untyped-def]
     return lambda q, dq, tau, model, ws, ddq: _forward_dynamics_recursive(
         q, dq, tau, model, ws, ddq
     )
 
 
-@compiled_as(mass_and_bias)
+@compiled_as(mass_and_bias, runtime_free=True)
 def _mass_and_bias_compiled(q, dq, model, ws):  # type: ignore[no-untyped-def]
     return lambda q, dq, model, ws: _mass_and_bias(q, dq, model, ws)
 
 
-@compiled_as(joint_forces)
+@compiled_as(joint_forces, runtime_free=True)
 def _joint_forces_compiled(q, dq, tau, model, rhs):  # type: ignore[no-untyped-def]
     return lambda q, dq, tau, model, rhs: _joint_forces(q, dq, tau, model, rhs)

@@ -413,8 +413,8 @@ class PackedArm:
     scalar : bool
         Whether the arm takes the scalar kernel of two links with one mode each
         (which needs no workspace).
-    tip : ndarray
-        The last tip's basis (:meth:`flexarm.FlexibleArm.point_basis`).
+    tip : ndarray or None
+        The last tip's basis (:meth:`flexarm.FlexibleArm.point_basis`), if given.
     tip_distance : float
         Length of the last link, m.
     bases : dict
@@ -426,7 +426,7 @@ class PackedArm:
     n_links: int
     n_dof: int
     scalar: bool
-    tip: F64
+    tip: F64 | None
     tip_distance: float
     bases: dict[tuple[int, float], F64] = field(default_factory=dict, repr=False)
     _local: threading.local = field(default_factory=threading.local, repr=False)
@@ -434,13 +434,15 @@ class PackedArm:
     MAX_BASES = 64
 
     @classmethod
-    def from_arrays(cls, arrays: ArmArrays, tip: F64) -> PackedArm:
-        """Pack ``arrays`` (:attr:`flexarm.FlexibleArm.arrays`); ``tip`` is the last
-        link's basis at its tip (:meth:`flexarm.FlexibleArm.point_basis`)."""
+    def from_arrays(cls, arrays: ArmArrays, tip: F64 | None = None) -> PackedArm:
+        """Pack ``arrays`` (:attr:`flexarm.FlexibleArm.arrays`, or any plant's);
+        ``tip`` is the last link's basis at its tip
+        (:meth:`flexarm.FlexibleArm.point_basis`), for :attr:`tip`."""
         n_links, n = arrays.mode_start.shape[0] - 1, arrays.mass_integral.shape[0]
         scalar = is_two_links_one_mode(arrays)
         length = float(arrays.link[n_links - 1, LEN])
-        return cls(pack_buffer(arrays), n_links, n, scalar, _frozen(tip), length)
+        tip_basis = None if tip is None else _frozen(tip)
+        return cls(pack_buffer(arrays), n_links, n, scalar, tip_basis, length)
 
     def __reduce__(self) -> tuple[Any, ...]:
         # a threading.local does not pickle: a copy starts with no workspaces
