@@ -38,7 +38,6 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from .._compile import njit_runtime_free
 from .arrays import (
     AX_BETA,
     AX_BETA_MODES,
@@ -115,7 +114,7 @@ def _solve_block(
         X[i, col] = t
 
 
-@njit_runtime_free(cache=True, nogil=True)
+@nb.njit(cache=True, nogil=True, inline="always")
 def _accelerations_recursive(
     q: F64, dq: F64, model: ArmArrays, ws: Workspace, ddq: F64
 ) -> None:  # pragma: no cover - compiled
@@ -127,11 +126,6 @@ def _accelerations_recursive(
     ``ws.lmass`` each link's modal block and its factor, ``ws.rows`` the block
     coupling a link's frame to its modes, ``ws.axial`` one link's foreshortening
     terms.
-
-    Compiled on its own (not inlined): inlined beside the dense kernel into
-    :func:`flexarm.model.dynamics.forward_dynamics` it made the whole function,
-    the scalar and dense paths included, 2 to 4 times slower; called, it costs
-    a call, and without the refcount runtime its arguments no refcounting.
     """
     n_links = model.link.shape[0]
     ms, lk, jt = model.mode_start, model.link, model.joint
