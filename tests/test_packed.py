@@ -328,16 +328,42 @@ def test_a_point_is_checked_before_its_basis_is_kept():
 
 
 # ----------------------------------------------------------- state and threads
-def test_a_stale_workspace_does_not_change_the_result():
-    """The workspace of a thread is reused: every kernel must write before it reads."""
-    for name in ("three-links-stiffening", "joints-motor-friction-stiffening"):
-        arm = ARMS[name]()
-        q, dq, tau = (x[0] for x in states(arm, 1))
-        want = kernel(arm, q, dq, tau)
-        arm._packed()._workspace()[:] = np.nan
-        assert np.array_equal(arm.forward_dynamics(q, dq, tau), want)
-        arm._packed()._workspace()[:] = 1e300
-        assert np.array_equal(arm.mass_matrix(q), arm.mass_matrix(q, backend="compiled"))
+def test_the_kernels_write_every_scratch_value_before_reading_it(arm):
+    """A call's workspace is uninitialised (on the stack, or just allocated)."""
+    q, dq, tau = (x[0] for x in states(arm, 1))
+    results = []
+    for fill in (0.0, np.nan, 1e300):
+        ws = make_workspace(arm.n_dof)
+        for field in ws:
+            field[...] = fill
+        ddq = np.empty(arm.n_dof)
+        dynamics.forward_dynamics(q, dq, tau, arm.arrays, ws, ddq)
+        results.append(ddq)
+        for field in ws:
+            field[...] = fill
+        dynamics.mass_and_bias(q, dq, arm.arrays, ws)
+        results.append(ws.mass.copy())
+    for k in (2, 4):
+        assert np.array_equal(results[k], results[0])
+        assert np.array_equal(results[k + 1], results[1])
+
+
+def test_an_arm_too_large_for_the_stack_allocates_its_workspace():
+    arm = fa.FlexibleArm([fa.Link(0.5, EI, RHO, n_modes=1)] * 16, geometric_stiffening=False)
+    assert not arm._packed().on_stack
+    q, dq, tau = states(arm, 3)
+    for b in range(3):
+        fast = arm.forward_dynamics(q[b], dq[b], tau[b])
+        assert fast.shape == (arm.n_dof,)
+        assert np.array_equal(fast, kernel(arm, q[b], dq[b], tau[b]))
+        assert np.array_equal(
+            fast, arm.forward_dynamics(q[b : b + 1], dq[b : b + 1], tau[b : b + 1])[0]
+        )
+        ws = make_workspace(arm.n_dof)
+        dynamics.mass_and_bias(q[b], dq[b], arm.arrays, ws)
+        assert np.array_equal(arm.mass_matrix(q[b]), ws.mass)
+    with pytest.raises(InvalidValueError, match=r"'tau' .* shape \(16,\)"):
+        arm.forward_dynamics(q[0], dq[0], tau[0, :3])
 
 
 def test_two_threads_on_one_arm_give_the_serial_results():
@@ -373,6 +399,7 @@ def test_an_arm_pickles_after_a_compiled_call():
     q, dq, tau = (x[0] for x in states(arm, 1))
     want = arm.forward_dynamics(q, dq, tau)
     arm.point_position(q, 0, 1.0)
+    assert arm._packed().bases
     copy = pickle.loads(pickle.dumps(arm))
     assert np.array_equal(copy.forward_dynamics(q, dq, tau), want)
 

@@ -4,7 +4,7 @@
 torques (N m), as python-control's ``nlsys`` with named signals, its update
 function calling the compiled dynamics (:func:`flexarm.model.dynamics.forward_dynamics`)
 through the arm's packed form (:mod:`flexarm.model.packed`: about a microsecond a
-call, a workspace per thread). It simulates with
+call, a workspace of its own per call). It simulates with
 ``control.input_output_response`` and linearises with ``control.linearize``;
 the linearised arm at rest is also :func:`flexarm.control.linearize.linearize`
 (``.to_control()`` gives it as ``control.ss`` with the same signal names), so the

@@ -25,16 +25,16 @@ themselves, so a wrong shape never reaches a kernel.
 Every state may also come as a batch: ``q`` of shape ``(m, n_dof)`` is ``m``
 states evaluated in one compiled call, each exactly as a call of its own.
 
-Threads: the kernels release the GIL. The packed buffer is never written. The
-scratch is one workspace per thread and arm (``threading.local``; allocating
-one per call costs a call 4 times what fetching it does), so concurrent calls
-on one arm share nothing writable.
+Threads: the kernels release the GIL and nothing they write is shared. The
+packed buffer is never written; a call's workspace is its own, on the stack of
+the compiled entry point (up to :data:`STACK_FLOATS` values, about 16
+coordinates) or allocated by the call, so concurrent calls on one arm need no
+lock. The kernels write every scratch value before reading it.
 """
 
 from __future__ import annotations
 
 import math
-import threading
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -61,10 +61,9 @@ from .arrays import (
 )
 from .dynamics import _forward_dynamics, _mass_and_bias
 from .dynamics_points import _point_state
-from .dynamics_two_links import _forward_dynamics_two_links_one_mode, is_two_links_one_mode
 from .kernel_checks import shape_message, state_shapes
 
-__all__ = ["PackedArm", "pack_buffer"]
+__all__ = ["STACK_FLOATS", "PackedArm", "pack_buffer"]
 
 F64 = NDArray[np.float64]
 
@@ -280,6 +279,34 @@ def _check_states(q: F64, dq: F64, tau: F64, buf: F64) -> int:  # pragma: no cov
 
 
 # --------------------------------------------------------------- entry points
+def _stack_typing(typingctx, size):  # type: ignore[no-untyped-def]
+    """The typing and code of :func:`_stack`: ``size`` float64 values on the stack of
+    the compiled function that calls it (a dynamic ``alloca``), uninitialised,
+    freed when that function returns. Only for the entry points below, called
+    once a call and never inlined into a loop; ``size`` at most
+    :data:`STACK_FLOATS`."""
+    retty = nt.Array(nt.float64, 1, "C")
+
+    def codegen(context, builder, sig, args):  # type: ignore[no-untyped-def]
+        (n,) = args
+        data = builder.alloca(context.get_data_type(nt.float64), size=n)
+        arr = make_array(retty)(context, builder)  # type: ignore[no-untyped-call]
+        eight = context.get_constant(nt.intp, 8)
+        populate_array(  # type: ignore[no-untyped-call]
+            arr, data=data, shape=[n], strides=[eight], itemsize=eight, meminfo=None
+        )
+        return arr._getvalue()
+
+    return retty(size), codegen
+
+
+_stack: Any = intrinsic(_stack_typing)
+
+STACK_FLOATS = 4096
+"""Workspaces up to this many float64 values (32 KiB, about 16 coordinates) live on
+the stack of a call; larger ones are allocated by the call."""
+
+
 _F1 = nt.Array(nt.float64, 1, "C")
 _F2 = nt.Array(nt.float64, 2, "C")
 _F3 = nt.Array(nt.float64, 3, "C")
@@ -287,51 +314,28 @@ _R1 = nt.Array(nt.float64, 1, "C", readonly=True)
 _ENTRY = {"cache": True, "nogil": True}
 
 
-@njit_runtime_free([nt.int64(_F1, _F1, _F1, _F1, _F1)], **_ENTRY)
-def _scalar_dynamics(
-    buf: F64, q: F64, dq: F64, tau: F64, out: F64
-) -> int:  # pragma: no cover - compiled
-    """The paper's structure (two links, one mode each, rigid joints): the scalar
-    kernel that :func:`flexarm.model.dynamics.forward_dynamics` takes for it, into
-    ``out``; no workspace. Returns a status code (0: done)."""
-    status = _check_state(q, dq, tau, buf)
-    if status == _OK:
-        _forward_dynamics_two_links_one_mode(q, dq, tau, _unpack(buf), out)
-    return status
-
-
-@njit_runtime_free([nt.int64(_F1, _F2, _F2, _F2, _F2)], **_ENTRY)
-def _scalar_dynamics_batch(
-    buf: F64, q: F64, dq: F64, tau: F64, out: F64
-) -> int:  # pragma: no cover - compiled
-    """:func:`_scalar_dynamics` for every row of ``q, dq, tau`` into ``out``."""
-    status = _check_states(q, dq, tau, buf)
-    if status == _OK:
-        model = _unpack(buf)
-        for b in range(q.shape[0]):
-            _forward_dynamics_two_links_one_mode(q[b], dq[b], tau[b], model, out[b])
-    return status
-
-
-@njit_runtime_free([nt.int64(_F1, _F1, _F1, _F1, _F1, _F1)], **_ENTRY)
+@njit_runtime_free([nt.int64(_F1, _F1, _F1, _F1, _F1, nt.int64)], **_ENTRY)
 def _dynamics(
-    buf: F64, wbuf: F64, q: F64, dq: F64, tau: F64, out: F64
+    buf: F64, q: F64, dq: F64, tau: F64, out: F64, size: int
 ) -> int:  # pragma: no cover - compiled
     """:func:`flexarm.model.dynamics.forward_dynamics` of the packed arm into ``out``,
-    ``wbuf`` its workspace; returns a status code (0: done)."""
+    its workspace of ``size`` values on this call's stack; returns a status code
+    (0: done)."""
     status = _check_state(q, dq, tau, buf)
     if status == _OK:
-        n = q.shape[0]
+        n, wbuf = q.shape[0], _stack(size)
         ws = _workspace(wbuf, n, _own_mass(wbuf, n))
         _forward_dynamics(q, dq, tau, _unpack(buf), ws, out)
     return status
 
 
 @njit_runtime_free([nt.int64(_F1, _F1, _F2, _F2, _F2, _F2)], **_ENTRY)
-def _dynamics_batch(
+def _dynamics_rows(
     buf: F64, wbuf: F64, q: F64, dq: F64, tau: F64, out: F64
 ) -> int:  # pragma: no cover - compiled
-    """:func:`_dynamics` for every row of ``q, dq, tau`` into ``out``."""
+    """:func:`_dynamics` for every row of ``q, dq, tau`` (2-D) into ``out``, with the
+    workspace ``wbuf`` (allocated by the caller: a batch, or an arm too large for
+    the stack, given as a batch of one)."""
     status = _check_states(q, dq, tau, buf)
     if status == _OK:
         n = q.shape[1]
@@ -341,19 +345,22 @@ def _dynamics_batch(
     return status
 
 
-@njit_runtime_free([nt.int64(_F1, _F1, _F1, _F2)], **_ENTRY)
-def _mass_matrix(buf: F64, wbuf: F64, q: F64, out: F64) -> int:  # pragma: no cover - compiled
-    """``M(q)`` of :func:`flexarm.model.dynamics.mass_and_bias` into ``out`` (n, n)."""
+@njit_runtime_free([nt.int64(_F1, _F1, _F2, nt.int64)], **_ENTRY)
+def _mass_matrix(buf: F64, q: F64, out: F64, size: int) -> int:  # pragma: no cover - compiled
+    """``M(q)`` of :func:`flexarm.model.dynamics.mass_and_bias` into ``out`` (n, n),
+    its workspace on this call's stack."""
     n = _sizes(buf)[1]
     status = _check(q, n, 0)
     if status == _OK:
+        wbuf = _stack(size)
         _mass_and_bias(q, q, _unpack(buf), _workspace(wbuf, n, out))  # M needs no dq
     return status
 
 
 @njit_runtime_free([nt.int64(_F1, _F1, _F2, _F3)], **_ENTRY)
-def _mass_matrix_batch(buf: F64, wbuf: F64, q: F64, out: F64) -> int:  # pragma: no cover - compiled
-    """:func:`_mass_matrix` for every row of ``q`` into ``out`` (m, n, n)."""
+def _mass_matrix_rows(buf: F64, wbuf: F64, q: F64, out: F64) -> int:  # pragma: no cover - compiled
+    """:func:`_mass_matrix` for every row of ``q`` into ``out`` (m, n, n), with the
+    workspace ``wbuf``."""
     n, m = _sizes(buf)[1], q.shape[0]
     status = _check_rows(q, m, n, 0)
     if status == _OK:
@@ -377,7 +384,7 @@ def _point(
 
 
 @njit_runtime_free([nt.int64(_F1, _F2, nt.int64, nt.float64, _R1, _F2)], **_ENTRY)
-def _point_batch(
+def _point_rows(
     buf: F64, q: F64, link: int, distance: float, phi: F64, out: F64
 ) -> int:  # pragma: no cover - compiled
     """:func:`_point` for every row of ``q`` into ``out`` (m, 2)."""
@@ -399,7 +406,7 @@ def _unpacked(buf: F64) -> ArmArrays:  # pragma: no cover - compiled
 
 
 # ------------------------------------------------------------------ the object
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, slots=True)
 class PackedArm:
     """An arm packed for cheap compiled calls from Python (module docstring).
 
@@ -410,13 +417,17 @@ class PackedArm:
     buf : ndarray, shape (size,)
         The arm (:func:`pack_buffer`); never written.
     n_links, n_dof : int
-    scalar : bool
-        Whether the arm takes the scalar kernel of two links with one mode each
-        (which needs no workspace).
     tip : ndarray or None
         The last tip's basis (:meth:`flexarm.FlexibleArm.point_basis`), if given.
     tip_distance : float
         Length of the last link, m.
+    scratch : int
+        Values in a workspace (:func:`flexarm.model.arrays.workspace_size`).
+    on_stack : bool
+        Whether a workspace fits on a call's stack (:data:`STACK_FLOATS`);
+        otherwise each call allocates one.
+    square : tuple of int
+        ``(n_dof, n_dof)``, the shape of a mass matrix.
     bases : dict
         Memo of point bases ``(link, distance) -> phi`` that the arm fills, at
         most :attr:`MAX_BASES` (the oldest goes first).
@@ -425,13 +436,20 @@ class PackedArm:
     buf: F64
     n_links: int
     n_dof: int
-    scalar: bool
     tip: F64 | None
     tip_distance: float
+    scratch: int = field(init=False, repr=False)
+    on_stack: bool = field(init=False, repr=False)
+    square: tuple[int, int] = field(init=False, repr=False)
     bases: dict[tuple[int, float], F64] = field(default_factory=dict, repr=False)
-    _local: threading.local = field(default_factory=threading.local, repr=False)
 
     MAX_BASES = 64
+
+    def __post_init__(self) -> None:
+        scratch = workspace_size(self.n_dof)
+        object.__setattr__(self, "scratch", scratch)
+        object.__setattr__(self, "on_stack", scratch <= STACK_FLOATS)
+        object.__setattr__(self, "square", (self.n_dof, self.n_dof))
 
     @classmethod
     def from_arrays(cls, arrays: ArmArrays, tip: F64 | None = None) -> PackedArm:
@@ -439,15 +457,9 @@ class PackedArm:
         ``tip`` is the last link's basis at its tip
         (:meth:`flexarm.FlexibleArm.point_basis`), for :attr:`tip`."""
         n_links, n = arrays.mode_start.shape[0] - 1, arrays.mass_integral.shape[0]
-        scalar = is_two_links_one_mode(arrays)
         length = float(arrays.link[n_links - 1, LEN])
         tip_basis = None if tip is None else _frozen(tip)
-        return cls(pack_buffer(arrays), n_links, n, scalar, tip_basis, length)
-
-    def __reduce__(self) -> tuple[Any, ...]:
-        # a threading.local does not pickle: a copy starts with no workspaces
-        fields = (self.buf, self.n_links, self.n_dof, self.scalar, self.tip, self.tip_distance)
-        return (type(self), fields)
+        return cls(pack_buffer(arrays), n_links, n, tip_basis, length)
 
     def remember_basis(self, link: int, distance: float, phi: F64) -> None:
         """Keep ``phi`` as the basis of the point ``(link, distance)``."""
@@ -455,16 +467,11 @@ class PackedArm:
             self.bases.pop(next(iter(self.bases)), None)
         self.bases[(link, distance)] = _frozen(phi)
 
-    def _workspace(self) -> F64:
-        """This thread's workspace for this arm (allocated on its first call)."""
-        try:
-            return self._local.wbuf  # type: ignore[no-any-return]
-        except AttributeError:
-            wbuf = self._local.wbuf = np.zeros(workspace_size(self.n_dof))
-            return wbuf
-
     # ----------------------------------------------------------------- calls
-    def forward_dynamics(self, q: object, dq: object, tau: object) -> F64 | None:
+    # The guards read ``dtype`` (a list has none: AttributeError) and leave the
+    # rest to the compiled entry points' signatures (a strided, read-only or 3-D
+    # array: TypeError): a few tens of ns of a call of some 600.
+    def forward_dynamics(self, q: Any, dq: Any, tau: Any) -> F64 | None:
         """``qddot`` of :func:`flexarm.model.dynamics.forward_dynamics`.
 
         Parameters
@@ -486,30 +493,28 @@ class PackedArm:
         InvalidValueError
             Naming the argument of a wrong shape or with non-finite entries.
         """
-        if not (type(q) is _NDARRAY and type(dq) is _NDARRAY and type(tau) is _NDARRAY):
-            return None
-        if not (q.dtype is _FLOAT64 and dq.dtype is _FLOAT64 and tau.dtype is _FLOAT64):
-            return None
         try:
-            if q.ndim == 1:
+            if q.dtype is not _FLOAT64 or dq.dtype is not _FLOAT64 or tau.dtype is not _FLOAT64:
+                return None
+            if q.ndim == 1 and self.on_stack:
                 out = _empty(self.n_dof)
-                if self.scalar:
-                    status = _scalar_dynamics(self.buf, q, dq, tau, out)
-                else:
-                    status = _dynamics(self.buf, self._workspace(), q, dq, tau, out)
+                status = _dynamics(self.buf, q, dq, tau, out, self.scratch)
+            elif q.ndim == 1:  # a batch of one, with a workspace of its own
+                out = _empty((1, self.n_dof))
+                status = _dynamics_rows(
+                    self.buf, _empty(self.scratch), q[None], dq[None], tau[None], out
+                )
+                out = out[0]
             else:
                 out = _empty((q.shape[0], self.n_dof))
-                if self.scalar:
-                    status = _scalar_dynamics_batch(self.buf, q, dq, tau, out)
-                else:
-                    status = _dynamics_batch(self.buf, self._workspace(), q, dq, tau, out)
-        except TypeError:  # dimensions differ, a strided or read-only array: convert
+                status = _dynamics_rows(self.buf, _empty(self.scratch), q, dq, tau, out)
+        except (AttributeError, TypeError):  # not arrays, strided, read-only, mixed
             return None
         if status:
             self._fail(status, q, dq, tau)
         return out
 
-    def mass_matrix(self, q: object) -> F64 | None:
+    def mass_matrix(self, q: Any) -> F64 | None:
         """``M(q)`` of :func:`flexarm.model.dynamics.mass_and_bias`.
 
         Parameters
@@ -523,23 +528,26 @@ class PackedArm:
             kg m**2 (modal units); None if ``q`` is not a C-contiguous, writable
             float64 NumPy array of 1 or 2 dimensions.
         """
-        if type(q) is not _NDARRAY or q.dtype is not _FLOAT64:
-            return None
-        n = self.n_dof
         try:
-            if q.ndim == 1:
-                out = _empty((n, n))
-                status = _mass_matrix(self.buf, self._workspace(), q, out)
+            if q.dtype is not _FLOAT64:
+                return None
+            if q.ndim == 1 and self.on_stack:
+                out = _empty(self.square)
+                status = _mass_matrix(self.buf, q, out, self.scratch)
+            elif q.ndim == 1:
+                out = _empty((1, *self.square))
+                status = _mass_matrix_rows(self.buf, _empty(self.scratch), q[None], out)
+                out = out[0]
             else:
-                out = _empty((q.shape[0], n, n))
-                status = _mass_matrix_batch(self.buf, self._workspace(), q, out)
-        except TypeError:
+                out = _empty((q.shape[0], *self.square))
+                status = _mass_matrix_rows(self.buf, _empty(self.scratch), q, out)
+        except (AttributeError, TypeError):
             return None
         if status:
             self._fail(status, q)
         return out
 
-    def point_position(self, q: object, link: int, distance: float, phi: F64) -> F64 | None:
+    def point_position(self, q: Any, link: int, distance: float, phi: F64) -> F64 | None:
         """Position of the point ``distance`` m along ``link`` (0-based).
 
         Parameters
@@ -558,16 +566,16 @@ class PackedArm:
             ``(x, y)`` in m, base frame; None if ``q`` is not a C-contiguous,
             writable float64 NumPy array of 1 or 2 dimensions.
         """
-        if type(q) is not _NDARRAY or q.dtype is not _FLOAT64:
-            return None
         try:
+            if q.dtype is not _FLOAT64:
+                return None
             if q.ndim == 1:
                 out = _empty(2)
                 status = _point(self.buf, q, link, distance, phi, out)
             else:
                 out = _empty((q.shape[0], 2))
-                status = _point_batch(self.buf, q, link, distance, phi, out)
-        except TypeError:
+                status = _point_rows(self.buf, q, link, distance, phi, out)
+        except (AttributeError, TypeError):
             return None
         if status:
             self._fail(status, q)
