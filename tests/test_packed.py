@@ -21,8 +21,8 @@ from hypothesis import strategies as st
 import flexarm as fa
 from flexarm.errors import InvalidTypeError, InvalidValueError
 from flexarm.model import dynamics
-from flexarm.model.arrays import make_workspace, workspace_shapes
-from flexarm.model.packed import _unpacked, _workspace
+from flexarm.model.arrays import make_workspace, workspace_shapes, workspace_size
+from flexarm.model.packed import _scratch_size, _unpacked, _workspace
 
 L, EI, RHO = 4.5, 1676.0, 0.335
 JOINT = fa.NonlinearJoint.default(fa.MakkarFriction.default())
@@ -425,3 +425,12 @@ def test_property_any_state_gives_the_kernel_and_a_batch_of_one(
 
 
 _PROPERTY_ARM = ARMS["three-links-stiffening"]()
+
+
+@nb.njit
+def _scratch_sizes(top):  # pragma: no cover - compiled
+    return [_scratch_size(n) for n in range(1, top)]
+
+
+def test_the_compiled_workspace_size_is_workspace_size():
+    assert _scratch_sizes(70) == [workspace_size(n) for n in range(1, 70)]

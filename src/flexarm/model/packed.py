@@ -27,7 +27,7 @@ states evaluated in one compiled call, each exactly as a call of its own.
 
 Threads: the kernels release the GIL and nothing they write is shared. The
 packed buffer is never written; a call's workspace is its own, on the stack of
-the compiled entry point (up to :data:`STACK_FLOATS` values, about 16
+the compiled entry point (up to :data:`STACK_FLOATS` values: arms of up to 17
 coordinates) or allocated by the call, so concurrent calls on one arm need no
 lock. The kernels write every scratch value before reading it.
 """
@@ -302,9 +302,10 @@ def _stack_typing(typingctx, size):  # type: ignore[no-untyped-def]
 
 _stack: Any = intrinsic(_stack_typing)
 
-STACK_FLOATS = 4096
-"""Workspaces up to this many float64 values (32 KiB, about 16 coordinates) live on
-the stack of a call; larger ones are allocated by the call."""
+STACK_FLOATS = 2048
+"""Workspaces up to this many float64 values (16 KiB: arms of up to 17 coordinates)
+live on the stack of a call, half the smallest thread stack Python allows;
+larger ones are allocated by the call."""
 
 
 _F1 = nt.Array(nt.float64, 1, "C")
@@ -314,59 +315,84 @@ _R1 = nt.Array(nt.float64, 1, "C", readonly=True)
 _ENTRY = {"cache": True, "nogil": True}
 
 
-@njit_runtime_free([nt.int64(_F1, _F1, _F1, _F1, _F1, nt.int64)], **_ENTRY)
-def _dynamics(
-    buf: F64, q: F64, dq: F64, tau: F64, out: F64, size: int
-) -> int:  # pragma: no cover - compiled
-    """:func:`flexarm.model.dynamics.forward_dynamics` of the packed arm into ``out``,
-    its workspace of ``size`` values on this call's stack; returns a status code
+@nb.njit(inline="always")
+def _scratch_size(n: int) -> int:  # pragma: no cover - compiled
+    """:func:`flexarm.model.arrays.workspace_size` of ``n`` coordinates."""
+    return 2 * n * n + (10 + N_CHAIN_COLUMNS) * n + (AX_ROWS + 3 * n) * max(n, 3)
+
+
+@nb.njit(inline="always")
+def _scratch(out: F64, used: int, size: int) -> F64:  # pragma: no cover - compiled
+    """A workspace of ``size`` values: ``out``'s tail after its first ``used`` values
+    when the caller made it that long (an arm too large for the stack), else on
+    the stack of the entry point."""
+    if out.size >= used + size:
+        wbuf: F64 = _view(out, used, (size,), np.float64)
+        return wbuf
+    return _stack(size)  # type: ignore[no-any-return]
+
+
+# Each entry point below is compiled at import; the kernel is inlined into one
+# entry for the dynamics and one for the mass matrix (30 and 7 s to compile),
+# and the batch entries call those (a call of a few arrays, a few ns a state).
+@njit_runtime_free([nt.int64(_F1, _F1, _F1, _F1, _F1)], **_ENTRY)
+def _dynamics(buf: F64, q: F64, dq: F64, tau: F64, out: F64) -> int:  # pragma: no cover
+    """:func:`flexarm.model.dynamics.forward_dynamics` of the packed arm into
+    ``out[:n_dof]``; the workspace is ``out``'s tail if it has one of
+    :func:`_scratch_size` values, else on this call's stack. Returns a status code
     (0: done)."""
     status = _check_state(q, dq, tau, buf)
     if status == _OK:
-        n, wbuf = q.shape[0], _stack(size)
+        n = q.shape[0]
+        wbuf = _scratch(out, n, _scratch_size(n))
         ws = _workspace(wbuf, n, _own_mass(wbuf, n))
-        _forward_dynamics(q, dq, tau, _unpack(buf), ws, out)
+        _forward_dynamics(q, dq, tau, _unpack(buf), ws, _view(out, 0, (n,), np.float64))
     return status
 
 
 @njit_runtime_free([nt.int64(_F1, _F1, _F2, _F2, _F2, _F2)], **_ENTRY)
 def _dynamics_rows(
-    buf: F64, wbuf: F64, q: F64, dq: F64, tau: F64, out: F64
+    buf: F64, row: F64, q: F64, dq: F64, tau: F64, out: F64
 ) -> int:  # pragma: no cover - compiled
-    """:func:`_dynamics` for every row of ``q, dq, tau`` (2-D) into ``out``, with the
-    workspace ``wbuf`` (allocated by the caller: a batch, or an arm too large for
-    the stack, given as a batch of one)."""
+    """:func:`_dynamics` for every row of ``q, dq, tau`` (2-D) into ``out``; ``row``
+    is the output of one call (``n_dof`` values, or more with the workspace)."""
     status = _check_states(q, dq, tau, buf)
     if status == _OK:
         n = q.shape[1]
-        model, ws = _unpack(buf), _workspace(wbuf, n, _own_mass(wbuf, n))
         for b in range(q.shape[0]):
-            _forward_dynamics(q[b], dq[b], tau[b], model, ws, out[b])
+            _dynamics(buf, q[b], dq[b], tau[b], row)
+            for r in range(n):
+                out[b, r] = row[r]
     return status
 
 
-@njit_runtime_free([nt.int64(_F1, _F1, _F2, nt.int64)], **_ENTRY)
-def _mass_matrix(buf: F64, q: F64, out: F64, size: int) -> int:  # pragma: no cover - compiled
-    """``M(q)`` of :func:`flexarm.model.dynamics.mass_and_bias` into ``out`` (n, n),
-    its workspace on this call's stack."""
+@njit_runtime_free([nt.int64(_F1, _F1, _F2)], **_ENTRY)
+def _mass_matrix(buf: F64, q: F64, out: F64) -> int:  # pragma: no cover - compiled
+    """``M(q)`` of :func:`flexarm.model.dynamics.mass_and_bias` into ``out[:n_dof]``
+    (``out`` of shape (rows, n_dof): its rows after the first ``n_dof``, if enough,
+    hold the workspace, else it is on this call's stack)."""
     n = _sizes(buf)[1]
     status = _check(q, n, 0)
     if status == _OK:
-        wbuf = _stack(size)
-        _mass_and_bias(q, q, _unpack(buf), _workspace(wbuf, n, out))  # M needs no dq
+        flat = _view(out, 0, (out.size,), np.float64)
+        wbuf = _scratch(flat, n * n, _scratch_size(n))
+        mass = _view(flat, 0, (n, n), np.float64)
+        _mass_and_bias(q, q, _unpack(buf), _workspace(wbuf, n, mass))  # M needs no dq
     return status
 
 
-@njit_runtime_free([nt.int64(_F1, _F1, _F2, _F3)], **_ENTRY)
-def _mass_matrix_rows(buf: F64, wbuf: F64, q: F64, out: F64) -> int:  # pragma: no cover - compiled
-    """:func:`_mass_matrix` for every row of ``q`` into ``out`` (m, n, n), with the
-    workspace ``wbuf``."""
+@njit_runtime_free([nt.int64(_F1, _F2, _F2, _F3)], **_ENTRY)
+def _mass_matrix_rows(buf: F64, block: F64, q: F64, out: F64) -> int:  # pragma: no cover - compiled
+    """:func:`_mass_matrix` for every row of ``q`` into ``out`` (m, n, n); ``block`` is
+    the output of one call."""
     n, m = _sizes(buf)[1], q.shape[0]
     status = _check_rows(q, m, n, 0)
     if status == _OK:
-        model = _unpack(buf)
         for b in range(m):
-            _mass_and_bias(q[b], q[b], model, _workspace(wbuf, n, out[b]))
+            _mass_matrix(buf, q[b], block)
+            for r in range(n):
+                for c in range(n):
+                    out[b, r, c] = block[r, c]
     return status
 
 
@@ -425,9 +451,11 @@ class PackedArm:
         Values in a workspace (:func:`flexarm.model.arrays.workspace_size`).
     on_stack : bool
         Whether a workspace fits on a call's stack (:data:`STACK_FLOATS`);
-        otherwise each call allocates one.
+        otherwise each call allocates it with its output.
     square : tuple of int
         ``(n_dof, n_dof)``, the shape of a mass matrix.
+    tall : tuple of int
+        A mass matrix with room for a workspace in its rows below.
     bases : dict
         Memo of point bases ``(link, distance) -> phi`` that the arm fills, at
         most :attr:`MAX_BASES` (the oldest goes first).
@@ -441,6 +469,7 @@ class PackedArm:
     scratch: int = field(init=False, repr=False)
     on_stack: bool = field(init=False, repr=False)
     square: tuple[int, int] = field(init=False, repr=False)
+    tall: tuple[int, int] = field(init=False, repr=False)
     bases: dict[tuple[int, float], F64] = field(default_factory=dict, repr=False)
 
     MAX_BASES = 64
@@ -449,7 +478,9 @@ class PackedArm:
         scratch = workspace_size(self.n_dof)
         object.__setattr__(self, "scratch", scratch)
         object.__setattr__(self, "on_stack", scratch <= STACK_FLOATS)
-        object.__setattr__(self, "square", (self.n_dof, self.n_dof))
+        n = self.n_dof
+        object.__setattr__(self, "square", (n, n))
+        object.__setattr__(self, "tall", (n + -(-scratch // n), n))
 
     @classmethod
     def from_arrays(cls, arrays: ArmArrays, tip: F64 | None = None) -> PackedArm:
@@ -496,18 +527,18 @@ class PackedArm:
         try:
             if q.dtype is not _FLOAT64 or dq.dtype is not _FLOAT64 or tau.dtype is not _FLOAT64:
                 return None
-            if q.ndim == 1 and self.on_stack:
-                out = _empty(self.n_dof)
-                status = _dynamics(self.buf, q, dq, tau, out, self.scratch)
-            elif q.ndim == 1:  # a batch of one, with a workspace of its own
-                out = _empty((1, self.n_dof))
-                status = _dynamics_rows(
-                    self.buf, _empty(self.scratch), q[None], dq[None], tau[None], out
-                )
-                out = out[0]
+            if q.ndim == 1:
+                if self.on_stack:
+                    out = _empty(self.n_dof)
+                    status = _dynamics(self.buf, q, dq, tau, out)
+                else:  # the workspace in the output's tail, the result copied out
+                    big = _empty(self.n_dof + self.scratch)
+                    status = _dynamics(self.buf, q, dq, tau, big)
+                    out = big[: self.n_dof].copy()
             else:
+                row = _empty(self.n_dof if self.on_stack else self.n_dof + self.scratch)
                 out = _empty((q.shape[0], self.n_dof))
-                status = _dynamics_rows(self.buf, _empty(self.scratch), q, dq, tau, out)
+                status = _dynamics_rows(self.buf, row, q, dq, tau, out)
         except (AttributeError, TypeError):  # not arrays, strided, read-only, mixed
             return None
         if status:
@@ -531,16 +562,15 @@ class PackedArm:
         try:
             if q.dtype is not _FLOAT64:
                 return None
-            if q.ndim == 1 and self.on_stack:
-                out = _empty(self.square)
-                status = _mass_matrix(self.buf, q, out, self.scratch)
-            elif q.ndim == 1:
-                out = _empty((1, *self.square))
-                status = _mass_matrix_rows(self.buf, _empty(self.scratch), q[None], out)
-                out = out[0]
+            block = self.square if self.on_stack else self.tall
+            if q.ndim == 1:
+                out = _empty(block)
+                status = _mass_matrix(self.buf, q, out)
+                if not self.on_stack:
+                    out = out[: self.n_dof].copy()
             else:
                 out = _empty((q.shape[0], *self.square))
-                status = _mass_matrix_rows(self.buf, _empty(self.scratch), q, out)
+                status = _mass_matrix_rows(self.buf, _empty(block), q, out)
         except (AttributeError, TypeError):
             return None
         if status:
