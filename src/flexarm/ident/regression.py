@@ -10,7 +10,8 @@ Three estimators share one implementation:
   estimate, weights ``h_i**(-d) K((x - X_i)/h_i)``; with a bandwidth per
   dimension ``h_i**(-d)`` means ``prod_j h_ij**(-1)``.
 
-``i`` is 1-based and counts every sample seen, across :meth:`partial_fit` calls.
+``i`` is 1-based and counts every sample seen, across
+:meth:`~SemiRecursiveKernelRegression.partial_fit` calls.
 
 Modes
 -----
@@ -18,12 +19,15 @@ The estimator validates its hyperparameters into a constant
 :class:`~flexarm.ident.accumulators.Smoothing` and chooses the accumulator that
 keeps the streaming state (:mod:`flexarm.ident.accumulators`, one per mode):
 
-* **exact** (``grid=None``): the samples are stored; :meth:`predict` evaluates
-  eq. 14 at any point (with ``series=True``, by the Gaussian series);
+* **exact** (``grid=None``): the samples are stored;
+  :meth:`~SemiRecursiveKernelRegression.predict` evaluates eq. 14 at any point (with
+  ``series=True``, by the Gaussian series);
 * **grid** (``grid`` given): running sums ``numerator_`` and ``denominator_``
-  at the grid points; :meth:`predict` accepts grid points only;
+  at the grid points; :meth:`~SemiRecursiveKernelRegression.predict` accepts grid points
+  only;
 * **binned** (``grid`` and ``binned=r``, ``d = 1``): linear binning, with the
-  error bound of :mod:`flexarm.ident.binning` (:meth:`error_bound`);
+  error bound of :mod:`flexarm.ident.binning`
+  (:meth:`~SemiRecursiveKernelRegression.error_bound`);
 * **series** (``grid`` and ``series=True``: Gaussian, one bandwidth,
   ``d = 1``): cluster moments of a fast Gauss transform, ``O(n + m)`` work,
   equal to direct summation to rounding.
@@ -48,8 +52,8 @@ evaluated on the samples of the first ``fit`` or ``partial_fit`` call). With
 ``h_i**d = bandwidth**d i**(-d decay)``, the consistency conditions of
 Theorem 1, ``h_i -> 0`` and ``sum h_i**d = inf``, hold iff ``0 < decay <= 1/d``.
 ``decay = 0`` (fixed ``h``, the classical estimate) is also allowed;
-``decay < 0`` or ``decay > 1/d`` is rejected — by :meth:`fit`, since ``d`` is
-known only there.
+``decay < 0`` or ``decay > 1/d`` is rejected — by
+:meth:`~SemiRecursiveKernelRegression.fit`, since ``d`` is known only there.
 """
 
 from __future__ import annotations
@@ -84,7 +88,7 @@ Bandwidth = float | ArrayLike | str | Silverman
 
 
 class NotFittedError(ValueError, AttributeError):
-    """Raised when an estimator is used before :meth:`fit` (as in scikit-learn)."""
+    """Raised when an estimator is used before ``fit`` (as in scikit-learn)."""
 
 
 class _KernelRegression(HyperParameters):
