@@ -7,6 +7,11 @@ Run from the repository root::
     python benchmarks/bench_ident.py --json             # machine-readable
     python benchmarks/bench_ident.py --repeat 7 --n 1000000 --n-peer 100000
     python benchmarks/bench_ident.py --section hammerstein --ham-n 1000000
+    python benchmarks/bench_ident.py --section scale    # = benchmarks/bench_ident_scale.py
+
+Scale section: 10**8 samples fitted in bounded memory from a generator of chunks and
+from a Dask array, and the default (series) path on 10**6 samples onto 512 points;
+see ``bench_ident_scale.py`` (its options follow ``--section scale``).
 
 Hammerstein section (target: ``--ham-n`` = 10**6 samples identified in <= 2 s on the
 correlated path): ``u`` AR(1) noise with coefficient 0.9 scaled to about [-2, 2],
@@ -40,7 +45,9 @@ Streaming (target: ``--n`` = 10**6 samples onto the 512-point grid in <= 0.2 s o
         samples, plus ``predict(grid)`` (bit for bit the same result; checked).
     ``Nadaraya-Watson, fit``
         :class:`flexarm.ident.NadarayaWatson` (fixed ``h = 0.05``), ``fit`` plus
-        ``predict(grid)``: for reference, every sample keeps its full window.
+        ``predict(grid)`` with direct sums (``series=False``; for the gaussian the
+        default ``series="auto"`` is the series row): for reference, every sample
+        keeps its full window.
     ``semi-recursive, binned r=0.1, fit`` (not the uniform kernel)
         The same estimate in the optional binned mode (``binned=0.1``: bins
         ``0.1 h`` wide, blocks of nearly equal ``h_i``; approximate, with the
@@ -52,17 +59,16 @@ Streaming (target: ``--n`` = 10**6 samples onto the 512-point grid in <= 0.2 s o
         to rounding (checked).
 
 Against the peer (target: >= 20x faster than ``KernelReg`` at ``--n-peer`` = 10**5 samples)
-    statsmodels' ``KernelReg(y, X, var_type="c", reg_type="lc", bw=[h])`` (local
-    constant, fixed bandwidth, its default continuous kernel ``ckertype="gaussian"``)
-    constructed and ``fit`` at the 512 grid points, beside
-    ``NadarayaWatson(kernel="gaussian", bandwidth=h)`` ``fit`` plus ``predict`` at the
-    same points: direct sums in exact mode (samples stored) and in grid mode, the
-    series mode (``series=True``) in both, and binned grid mode (``binned=0.01``,
-    approximate: listed with its deviation, not for the target). All compute the
-    Nadaraya-Watson estimate ``sum_i y_i K((x - X_i)/h) / sum_i K((x - X_i)/h)``;
-    statsmodels' kernel carries the factor ``1/sqrt(2 pi)``, which cancels in the
-    ratio. The outputs are checked to agree (max abs difference relative to
-    ``max |m|``).
+    statsmodels' ``KernelReg(y, X, var_type="c", reg_type="lc", bw=[h])`` (local constant,
+    fixed bandwidth, its default continuous kernel ``ckertype="gaussian"``) constructed and
+    ``fit`` at the 512 grid points, beside ``NadarayaWatson(kernel="gaussian",
+    bandwidth=h)`` ``fit`` plus ``predict`` at the same points: direct sums
+    (``series=False``) in exact mode (samples stored) and in grid mode, the series mode
+    (``series=True``, what the default ``"auto"`` takes) in both, and binned grid mode
+    (``binned=0.01``, approximate: listed with its deviation, not for the target). All
+    compute the Nadaraya-Watson estimate ``sum_i y_i K((x - X_i)/h) / sum_i K((x -
+    X_i)/h)``; statsmodels' kernel carries the factor ``1/sqrt(2 pi)``, which cancels in the
+    ratio. The outputs are checked to agree (max abs difference relative to ``max |m|``).
 
     Like for like: the same data, bandwidth, kernel and the same 512 query points
     (querying at the 10**5 data points instead would take statsmodels minutes).
@@ -186,7 +192,8 @@ def bench_streaming(
             return est.predict(grid)
 
         def nw_fit(kernel=kernel) -> np.ndarray:
-            return NadarayaWatson(kernel, BANDWIDTH, grid=grid).fit(X, y).predict(grid)
+            est = NadarayaWatson(kernel, BANDWIDTH, grid=grid, series=False)  # direct sums
+            return est.fit(X, y).predict(grid)
 
         def sr_binned(kernel=kernel) -> tuple[np.ndarray, np.ndarray]:
             est = SemiRecursiveKernelRegression(kernel, BANDWIDTH, DECAY, grid=grid, binned=BIN)
@@ -245,10 +252,11 @@ def bench_peer(
     log(f"timing NadarayaWatson gaussian, n = {n}, exact and grid mode ...")
 
     def exact() -> np.ndarray:
-        return NadarayaWatson("gaussian", BANDWIDTH).fit(X, y).predict(grid)
+        return NadarayaWatson("gaussian", BANDWIDTH, series=False).fit(X, y).predict(grid)
 
     def gridded() -> np.ndarray:
-        return NadarayaWatson("gaussian", BANDWIDTH, grid=grid).fit(X, y).predict(grid)
+        est = NadarayaWatson("gaussian", BANDWIDTH, grid=grid, series=False)
+        return est.fit(X, y).predict(grid)
 
     def series_exact() -> np.ndarray:
         return NadarayaWatson("gaussian", BANDWIDTH, series=True).fit(X, y).predict(grid)
@@ -573,12 +581,21 @@ def main(argv: list[str] | None = None) -> int:
     )
     p.add_argument("--chunk", type=int, default=65_536, help="samples per partial_fit call")
     p.add_argument(
-        "--section", choices=("all", "kernel", "hammerstein"), default="all", help="what to time"
+        "--section",
+        choices=("all", "kernel", "hammerstein", "scale"),
+        default="all",
+        help="what to time (scale: bench_ident_scale.py, 10**8 samples; not part of all)",
     )
     p.add_argument("--ham-n", type=int, default=1_000_000, help="Hammerstein samples")
     p.add_argument("--ham-n-peer", type=int, default=100_000, help="samples against lstsq")
     p.add_argument("--json", action="store_true", help="print the results as JSON only")
-    args = p.parse_args(argv)
+    args, rest = p.parse_known_args(argv)
+    if args.section == "scale":  # its own script and options
+        from bench_ident_scale import main as scale_main
+
+        return scale_main(rest)
+    if rest:
+        p.error(f"unrecognized arguments: {' '.join(rest)}")
     sizes = (args.repeat, args.peer_repeat, args.n, args.n_peer, args.chunk, args.ham_n)
     if min(*sizes, args.ham_n_peer) < 1:
         p.error("--repeat, --peer-repeat, --n, --n-peer, --chunk, --ham-n* must be >= 1")

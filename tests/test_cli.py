@@ -18,7 +18,7 @@ def run(capsys, *argv):
     return status, out, err
 
 
-COMMANDS = ("reproduce", "simulate", "identify", "modes")  # api.md: the commands we promise
+COMMANDS = ("reproduce", "simulate", "sweep", "identify", "modes")  # api.md and issue 14
 
 
 def test_help_lists_every_command(capsys):

@@ -234,7 +234,31 @@ def _identify() -> Iterator[Case]:
     yield ["identify", "bogus"], "bogus", {}
 
 
-CASES: list[Case] = [*_simulate(), *_reproduce(), *_modes(), *_identify()]
+def _figures() -> Iterator[Case]:
+    """--format and --dpi on every command that writes figures: a format of the three,
+    a resolution within 20..1200 dpi, and only where figures are written."""
+    good = b"u,y\n" + b"".join(f"{i % 5 - 2},{(i % 7) / 3}\n".encode() for i in range(60))
+    commands = [
+        (["simulate", "--out", "{tmp}/out"], {}),
+        (["reproduce", "--out", "{tmp}/out"], {}),
+        (["identify", "fit", "{tmp}/d.csv", "--out", "{tmp}/out"], {"d.csv": good}),
+        (["identify", "study", "--out", "{tmp}/out"], {}),
+        (["identify", "hammerstein", "{tmp}/d.csv", "--out", "{tmp}/out"], {"d.csv": good}),
+        (["identify", "hammerstein", "--out", "{tmp}/out"], {}),
+    ]
+    for argv, files in commands:
+        for value in ["jpg", "", ".png"]:
+            yield [*argv, f"--format={value}"], "--format", files
+        for value in ["nan", "inf", "abc", "", "0", "-72", "10", "5000", "300dpi"]:
+            yield [*argv, f"--dpi={value}"], "--dpi", files
+    # figures are written only with --out: asked for without it, it is an error
+    yield ["simulate", "--format", "pdf"], "--out", {}
+    yield ["identify", "fit", "{tmp}/d.csv", "--dpi", "300"], "--out", {"d.csv": good}
+    yield ["identify", "study", "--format", "svg"], "--out", {}
+    yield ["identify", "hammerstein", "{tmp}/d.csv", "--format", "svg"], "--out", {"d.csv": good}
+
+
+CASES: list[Case] = [*_simulate(), *_reproduce(), *_modes(), *_identify(), *_figures()]
 
 
 def _id(case: Case) -> str:
@@ -305,7 +329,7 @@ def test_results_that_cannot_be_written_say_why(tmp_path, capsys, monkeypatch, c
     disk): exit 1, one line saying why in words, nothing written."""
     from flexarm.sim.results import SimulationResult
 
-    def refuse(self, directory, summary):
+    def refuse(self, directory, summary, **kwargs):
         raise OSError(code, os.strerror(code))
 
     monkeypatch.setattr(SimulationResult, "write", refuse)

@@ -72,7 +72,7 @@ def test_json_summary_has_the_metrics_and_the_settings(capsys, paper):
     assert s["trajectory"]["kind"] == "square" and s["trajectory"]["side"] == 4.0
     assert s["simulation"]["dt"] == 2e-4 and s["simulation"]["duration"] == 0.5
     assert s["delay"]["delay_s"] == 0.0 and s["shaper"] == {"kind": "none"}
-    assert data["run"]["controller"] == "jt-pd" and data["run"]["status"] == "ok"
+    assert data["run"]["controller"] == "pd" and data["run"]["status"] == "ok"
 
 
 def test_text_summary(capsys):

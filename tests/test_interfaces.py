@@ -54,6 +54,7 @@ def test_named_tuples_are_built_by_keyword(path):
 
 
 PUBLIC = [
+    "figures.py",
     "sim/closed_loop.py",
     "sim/open_loop.py",
     "sim/results.py",

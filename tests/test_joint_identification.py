@@ -103,6 +103,16 @@ def test_linear_frictionless_joint_is_an_exact_hammerstein_plant():
     assert res.summary()["friction"]["relative_rms_error"] is None
 
 
+def test_the_plot_reads_at_two_columns_and_saves_in_any_format(result, tmp_path, assert_readable):
+    from flexarm.figures import DOUBLE_COLUMN
+    from flexarm.studies.joint_identification.result import saved_files
+
+    assert_readable(result.plot(), DOUBLE_COLUMN)
+    paths = result.save(tmp_path, figure_format="svg")
+    assert [p.name for p in paths] == list(saved_files("svg"))
+    assert paths[-1].read_bytes().startswith(b"<?xml")
+
+
 def test_summary_plot_and_save(result, tmp_path):
     summary = result.summary()
     assert json.loads(json.dumps(summary)) == summary

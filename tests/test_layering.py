@@ -22,10 +22,12 @@ LAYERS: list[tuple[str, ...]] = [
     ("_version", "errors"),  # the version; the error types
     # lazy names, checks, atomic output, Numba, limits on a request's memory and time
     ("_lazy", "_validation", "_io", "_compile", "_budget"),
+    ("figures",),  # figure files (format, resolution, atomic writes) and the plots' style
     ("model", "fuzzy", "ident"),  # the plant; fuzzy inference; estimators from data
     ("sensing",),  # what a controller can see: sensors and transport delays
     ("control",),  # references, shapers, control laws, linear analysis
     ("sim",),  # the simulator, its results and metrics, scenario files
+    ("sweeps",),  # grid and Monte Carlo sweeps of scenarios, on every core or a Dask cluster
     # the paper's reproduction, the robot-joint identification study; Gymnasium environments
     ("studies", "envs"),
     ("cli",),  # the command line
@@ -88,6 +90,18 @@ WITHIN: dict[str, list[str]] = {
         "scenario_schema",
         "scenario",
     ],
+    "sweeps": [
+        "reader",
+        "keys",
+        "distributions",
+        "spec",
+        "records",
+        "table",
+        "journal",
+        "execute",
+        "cluster",
+        "driver",
+    ],
     "fuzzy": ["sets", "compiled", "system", "paper"],
     "envs": ["config", "kernel", "core", "env", "vector"],
     "ident": [
@@ -105,6 +119,8 @@ WITHIN: dict[str, list[str]] = {
         "report",
         "accumulators",
         "_setup",
+        "chunked",
+        "_persist",
         "regression",
         "arma",
         "correlation",

@@ -230,7 +230,7 @@ def test_figures_draw_on_new_or_given_figures_with_units(study):
         assert getattr(study, name)(given) is given and len(given.axes) == panels
     assert study.plot_tracking().axes[0].get_xlabel() == "x (m)"
     assert study.plot_deflections().axes[0].get_ylabel() == "tip deflection (mm)"
-    assert study.plot_sensitivity().axes[0].get_ylabel() == "RMS error (m)"
+    assert study.plot_sensitivity().axes[0].get_ylabel() == "RMS error (mm)"
     ax, artist = study.plot_surface()
     assert ax.name == "3d" and artist is not None
     assert (ax.get_xlabel(), ax.get_ylabel(), ax.get_zlabel()) == ("δ1 (m)", "δ2 (m)", "λ (-)")
@@ -240,7 +240,7 @@ def test_figures_draw_on_new_or_given_figures_with_units(study):
 def test_the_text_summary_lists_the_matrix_and_the_verdicts(study):
     text = study.text()
     assert text.startswith(f"{study.settings['runs']} runs in ")
-    assert len([ln for ln in text.splitlines() if ln.startswith("  nonadaptive ")]) == 6
+    assert len([ln for ln in text.splitlines() if ln.startswith("  pd ")]) == 6
     for claim in study.claims:
         assert f"{claim['claim']}: {claim['verdict'].upper()}" in text
 
@@ -374,13 +374,13 @@ def test_matrix_claims_follow_the_stated_rule(pd, fuzzy, expected):
 def test_claim_evidence_gives_the_numbers():
     got = claims(matrix((0.2, 0.2000001, DIVERGED), (0.05, 0.3, DIVERGED)), [], TOL)
     pd, fz, gain = (c["evidence"] for c in got)
-    assert "joint: RMS 0.2 m" in pd and "end effector: RMS 0.2 m" in pd
+    assert "joint: RMS 200 mm" in pd and "end effector: RMS 200 mm" in pd
     assert "0.5 m from elbow: diverged at t = 0.01 s" in pd
-    assert "RMS <= 0.2 m" in pd and "RMS <= 0.2 m" in fz
+    assert "RMS <= 200 mm" in pd and "RMS <= 200 mm" in fz
     assert "rad/s" in pd  # the linearised poles
     # fuzzy is lower at the joint only (0.3 > 0.2000001; both diverged at the elbow)
     assert gain.startswith("sensors where the adaptive RMS error is lower: joint (")
-    assert "0.5 m from elbow: inf vs inf m" in gain
+    assert "0.5 m from elbow: inf vs inf mm" in gain
 
 
 def test_ks_claim_needs_one_good_setting_per_sensor():
@@ -405,9 +405,9 @@ def test_ks_claim_needs_one_good_setting_per_sensor():
     assert len(got) == 4 and got[3]["claim"].startswith("Some setting of the fuzzy law")
     assert got[3]["verdict"] == "not supported"  # good with the joint sensor only
     evidence = got[3]["evidence"]
-    assert "joint: RMS 0.1 m at ks = 10 (damping)" in evidence  # the best setting
+    assert "joint: RMS 100 mm at ks = 10 (damping)" in evidence  # the best setting
     assert "end effector: every setting diverged" in evidence
-    assert "0.5 m from elbow: RMS 0.25 m at ks = 10 (damping)" in evidence
+    assert "0.5 m from elbow: RMS 250 mm at ks = 10 (damping)" in evidence
 
     good = ks_runs([[(1.0, "scaled", 0.2)], [(1.0, "scaled", 0.15)], [(1.0, "scaled", 0.0)]])
     assert claims(base, good, TOL)[3]["verdict"] == "supported"

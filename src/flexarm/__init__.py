@@ -9,8 +9,11 @@ controllers, sensors, references -> results; data -> estimators):
 * :mod:`flexarm.sim` — the simulator, its results and metrics, scenario files;
 * :mod:`flexarm.fuzzy` — Mamdani fuzzy inference (the paper's adaptive law);
 * :mod:`flexarm.ident` — kernel regression and Hammerstein identification;
+* :mod:`flexarm.sweeps` — grid and Monte Carlo sweeps over scenario parameters
+  (``flexarm.sweep``), on every core or a Dask cluster;
 * :mod:`flexarm.studies` — the paper's reproduction and the robot-joint study;
 * :mod:`flexarm.envs` — Gymnasium environments (the ``rl`` extra);
+* :mod:`flexarm.figures` — figure files (PNG, PDF, SVG) and the plots' style;
 * :mod:`flexarm.cli` — the ``flexarm`` command.
 
 Everything is imported on first use: ``import flexarm`` is cheap (no Numba, no
@@ -29,6 +32,7 @@ _SUBPACKAGES = (
     "cli",
     "control",
     "envs",
+    "figures",
     "fuzzy",
     "ident",
     "model",
@@ -36,6 +40,7 @@ _SUBPACKAGES = (
     "sensing",
     "sim",
     "studies",
+    "sweeps",
 )
 _NAMES = {
     "BeamModes": "model.modes",
@@ -49,6 +54,7 @@ _NAMES = {
     "simulate": "sim.closed_loop",
     "simulate_many": "sim.batch",
     "simulate_open_loop": "sim.open_loop",
+    "sweep": "sweeps.driver",
 }
 
 __getattr__, __dir__, __all__ = attach(__name__, _SUBPACKAGES, _NAMES)
@@ -72,3 +78,4 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run
     from .sim.open_loop import simulate_open_loop as simulate_open_loop
     from .sim.results import SimulationError as SimulationError
     from .sim.results import SimulationResult as SimulationResult
+    from .sweeps.driver import sweep as sweep

@@ -10,6 +10,8 @@ from pathlib import Path
 from typing import NoReturn
 
 from .._io import json_ready, output_directory, remove_stale
+from ..errors import InvalidValueError
+from ..figures import DEFAULT_DPI, DPI_RANGE, FORMATS, FigureFormat, check_dpi
 
 __all__ = [
     "EXIT_FAILURE",
@@ -21,7 +23,9 @@ __all__ = [
     "Stopped",
     "Terminated",
     "UsageError",
+    "add_figure_options",
     "check_out",
+    "figure_format",
     "json_ready",
     "number",
     "output_directory",
@@ -77,6 +81,58 @@ def number(
         return value
 
     return parse
+
+
+def _format_option(text: str) -> str:
+    if text.lower() in FORMATS:
+        return text.lower()
+    raise argparse.ArgumentTypeError(f"must be one of {', '.join(FORMATS)}. Got {text!r} instead.")
+
+
+def _dpi_option(text: str) -> float:
+    value = number(positive=True)(text)
+    try:
+        return check_dpi(value, "")
+    except InvalidValueError:
+        lo, hi = DPI_RANGE
+        raise argparse.ArgumentTypeError(
+            f"must be between {lo:g} and {hi:g} (dots per inch). Got {text!r} instead."
+        ) from None
+
+
+def add_figure_options(parser: argparse.ArgumentParser, written: str = "with --out") -> None:
+    """Add ``--format png|pdf|svg`` and ``--dpi`` (the figures' file format and
+    resolution, :class:`flexarm.figures.FigureFormat`) to a command that writes figures
+    (``written``: when it does)."""
+    lo, hi = DPI_RANGE
+    parser.add_argument(
+        "--format",
+        type=_format_option,
+        metavar="png|pdf|svg",
+        help=f"file format of the figures written {written} (default png; pdf and svg are "
+        "vector graphics, sharp at any size)",
+    )
+    parser.add_argument(
+        "--dpi",
+        type=_dpi_option,
+        metavar="DPI",
+        help=f"resolution of the figures, dots per inch (default {DEFAULT_DPI:g}; "
+        f"{lo:g} to {hi:g}; for pdf and svg only what is rasterised)",
+    )
+
+
+def figure_format(args: argparse.Namespace, prog: str, out: object = True) -> FigureFormat:
+    """The :class:`~flexarm.figures.FigureFormat` of ``--format`` and ``--dpi``;
+    a usage error if either is given but no figure will be written (``out`` is None)."""
+    if out is None:
+        for option in ("format", "dpi"):
+            if getattr(args, option) is not None:
+                raise UsageError(
+                    f"{prog}: error: argument --{option}: figures are written only with --out DIR"
+                )
+    fmt = "png" if args.format is None else args.format
+    dpi = DEFAULT_DPI if args.dpi is None else args.dpi
+    return FigureFormat(fmt, dpi)
 
 
 class Parser(argparse.ArgumentParser):

@@ -18,7 +18,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ..ident.options import METHODS, ORDER_RULES
-from ._common import UsageError
+from ._common import UsageError, add_figure_options, figure_format
 from ._identify_common import check_out_option, given, library_errors, positive_int, report
 
 __all__ = ["add_parser", "parse_knots", "parse_known", "parse_order"]
@@ -92,6 +92,7 @@ def _run(
         if wrong is not None:
             raise UsageError(f"{PROG}: error: argument {wrong}: {case}")
         check_out_option(args, PROG)
+        figure_format(args, PROG, args.out)  # --format, --dpi: only with --out
         return _fit_data(args) if args.data is not None else _robot(args)
 
     return run
@@ -136,7 +137,8 @@ def _fit_data(args: argparse.Namespace) -> int:
         **res.summary(),
         "wall_time_s": time.perf_counter() - t0,
     }
-    return report(args, PROG, summary, res.save, _format)
+    fmt = figure_format(args, PROG, args.out)
+    return report(args, PROG, summary, lambda d: res.save(d, figure_format=fmt), _format)
 
 
 def _robot(args: argparse.Namespace) -> int:
@@ -180,7 +182,8 @@ def _robot(args: argparse.Namespace) -> int:
         **res.summary(),
         "wall_time_s": time.perf_counter() - t0,
     }
-    return report(args, PROG, summary, res.save, _format)
+    fmt = figure_format(args, PROG, args.out)
+    return report(args, PROG, summary, lambda d: res.save(d, figure_format=fmt), _format)
 
 
 def _format_data(summary: dict[str, Any]) -> str:
@@ -269,7 +272,8 @@ output: with --out DIR (new or empty), all at once: for DATA nonlinearity.csv
 (u,phi; with --bootstrap also phi_low,phi_high), impulse_response.csv
 (lag,impulse_response[,low,high]), hammerstein.png and summary.json (path and
 why, whiteness, structure, baseline, warnings); for the robot experiment
-summary.json, curves.npz and identify_joint.png. --json prints the summary on
+summary.json, curves.npz and identify_joint.png (figures as .pdf or .svg with
+--format). --json prints the summary on
 stdout.
 """
 
@@ -289,6 +293,7 @@ def add_parser(isub: Any) -> None:
         "--seed", type=positive_int(0), metavar="S", help="seed: bootstrap, or robot (default 0)"
     )
     p.add_argument("--out", metavar="DIR", help="write the results into DIR (new or empty)")
+    add_figure_options(p)
     p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
     d = p.add_argument_group("with DATA")
     data_options = [

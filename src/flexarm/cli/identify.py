@@ -22,7 +22,7 @@ from typing import Any
 
 from ..ident.options import DISTRIBUTIONS, KERNELS, REGRESSION_FUNCTIONS
 from . import _hammerstein
-from ._common import UsageError
+from ._common import UsageError, add_figure_options, figure_format
 from ._identify_common import (
     CommandParser,
     check_out_option,
@@ -47,6 +47,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
     prog = f"{PROG} fit"
     check_out_option(args, prog)
+    fmt = figure_format(args, prog, args.out)
     t0 = time.perf_counter()
     with library_errors(prog):
         x, y, dropped = read_xy(
@@ -76,7 +77,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         **res.summary(),
         "wall_time_s": time.perf_counter() - t0,
     }
-    return report(args, prog, summary, res.save, _format_fit)
+    return report(args, prog, summary, lambda d: res.save(d, figure_format=fmt), _format_fit)
 
 
 def _format_fit(summary: dict[str, Any]) -> str:
@@ -108,6 +109,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
 
     prog = f"{PROG} study"
     check_out_option(args, prog)
+    fmt = figure_format(args, prog, args.out)
     t0 = time.perf_counter()
     with library_errors(prog):
         sizes = given(args, n_min="n_min", n_max="n_max", steps="n_steps")
@@ -140,7 +142,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
         "wall_time_s": time.perf_counter() - t0,
     }
     summary["settings"]["rng"] = f"default_rng({args.seed})"
-    return report(args, prog, summary, res.save, _format_study)
+    return report(args, prog, summary, lambda d: res.save(d, figure_format=fmt), _format_study)
 
 
 def _format_study(summary: dict[str, Any]) -> str:
@@ -202,8 +204,8 @@ the same sums by a Taylor series (fast Gauss transform), O(n + N) instead of
 O(n N) work, equal to the direct sums to rounding.
 
 output: with --out DIR (new or empty), DIR receives estimate.csv (x,m),
-estimate.png (data and estimate) and summary.json, all at once, only if
-everything succeeded. --json prints the summary on stdout.
+estimate.png (data and estimate; .pdf or .svg with --format) and summary.json, all
+at once, only if everything succeeded. --json prints the summary on stdout.
 """
 
 _STUDY_EPILOG = """\
@@ -213,7 +215,8 @@ default_rng(--seed); prints the table and the fitted log-log slope beside the
 theoretical -2p/(2p+1). Defaults are flexarm.ident.convergence_study's: gaussian
 kernel, Silverman's bandwidth on each data set, decay 1/(2p+1), 20 repetitions.
 
-output: with --out DIR, study.csv (n,mise,std), study.png and summary.json.
+output: with --out DIR, study.csv (n,mise,std), study.png (.pdf or .svg with
+--format) and summary.json.
 """
 
 
@@ -230,6 +233,7 @@ def _add_estimator_options(p: argparse.ArgumentParser, decay: str) -> None:
 
 def _add_output_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", metavar="DIR", help="write the results into DIR (new or empty)")
+    add_figure_options(p)
     p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
 
 

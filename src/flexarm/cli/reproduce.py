@@ -19,7 +19,14 @@ from ..studies.reproduction.cases import (
     DEFAULT_LAW,
     DEFAULT_TOLERANCE,
 )
-from ._common import EXIT_FAILURE, UsageError, check_out, write_failed
+from ._common import (
+    EXIT_FAILURE,
+    UsageError,
+    add_figure_options,
+    check_out,
+    figure_format,
+    write_failed,
+)
 
 __all__ = ["add_parser"]
 
@@ -44,6 +51,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 
     out = Path(os.path.abspath(args.out))
     check_out(out, _PROG)
+    fmt = figure_format(args, _PROG)
     try:
         rep = reproduce(
             duration=args.duration,
@@ -61,7 +69,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     except (InvalidTypeError, InvalidValueError) as exc:
         raise UsageError(f"{_PROG}: error: {exc}") from None
     try:
-        files = rep.write(out)
+        files = rep.write(out, figure_format=fmt)
     except OSError as exc:
         print(write_failed(_PROG, out, exc), file=sys.stderr)
         return EXIT_FAILURE
@@ -73,7 +81,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
 
 
 _DESCRIPTION = """\
-Run the paper's experiments: {nonadaptive JT-PD, fuzzy adaptive} x {joint sensor,
+Run the paper's experiments: {pd (nonadaptive JT-PD), fuzzy (adaptive)} x {joint sensor,
 end-effector sensor, sensor 0.5 m from the elbow} on the default square, with the
 paper's sensor model (rigid kinematics of the joint angles through a 2nd-order Pade
 delay, as the paper simulated it) and with the physical one (the deflected point); a
@@ -93,8 +101,9 @@ lambda / lambda(0, 0), so both laws equal the nonadaptive law with straight link
 ks = 1 is the paper's +-5 m universe; ks = 0 switches the adaptation off.
 
 output: --out DIR (default ./results) must be new or empty; it receives
-summary.json (what --json prints), table.csv, report.html (figures embedded),
-tracking.png, deflections.png, fuzzy_surface.png and sensitivity.png, all at once.
+summary.json (what --json prints), table.csv, report.html (figures embedded as PNG),
+tracking.png, deflections.png, fuzzy_surface.png and sensitivity.png (or .pdf,
+.svg with --format), all at once.
 
 exit status: 0 success (runs that diverge are results, reported as such);
 1 the results could not be written; 2 bad input (one line on stderr).
@@ -168,4 +177,5 @@ def add_parser(sub: Any) -> None:
         f"(default {DEFAULT_TOLERANCE:g})",
     )
     p.add_argument("--workers", type=int, help="parallel runs (default: every core)")
+    add_figure_options(p, "into --out")
     p.set_defaults(func=_cmd_reproduce)

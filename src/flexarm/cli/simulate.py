@@ -15,7 +15,7 @@ from ..errors import InvalidTypeError, InvalidValueError
 from ..sensing.delays import DELAY_METHODS
 from ..sensing.sensors import SENSOR_MODELS, PointSensor, Sensor, parse_sensor
 from ..sim.animation import ANIMATION_FORMATS
-from ..sim.results import RESULT_FILES, SimulationError
+from ..sim.results import SimulationError, result_files
 from ..sim.scenario_schema import (
     CONTROLLERS,
     DELAY_MODELS,
@@ -25,7 +25,15 @@ from ..sim.scenario_schema import (
     apply_overrides,
     read_scenario,
 )
-from ._common import EXIT_FAILURE, UsageError, check_out, json_ready, write_failed
+from ._common import (
+    EXIT_FAILURE,
+    UsageError,
+    add_figure_options,
+    check_out,
+    figure_format,
+    json_ready,
+    write_failed,
+)
 
 if TYPE_CHECKING:
     from ..sim.scenario import Scenario
@@ -194,6 +202,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if out is not None:
         check_out(out, "flexarm simulate")
     movie = _check_animate(args.animate)
+    fmt = figure_format(args, "flexarm simulate", out)
+    files = list(result_files(fmt))
     from ..sim.closed_loop import simulate
 
     try:
@@ -218,13 +228,13 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             "settings": scenario.description,
             "run": result.info,
             "out": args.out,
-            "files": [] if out is None else list(RESULT_FILES),
+            "files": [] if out is None else files,
             "animation": None if movie is None else str(movie),
         }
     )
     if out is not None:
         try:
-            result.write(out, summary)
+            result.write(out, summary, figure_format=fmt)
         except OSError as exc:
             print(write_failed("flexarm simulate", out, exc), file=sys.stderr)
             return EXIT_FAILURE
@@ -253,7 +263,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     else:
         print(_format_summary(summary))
         if out is not None:
-            print(f"  results in {out}: {', '.join(RESULT_FILES)}")
+            print(f"  results in {out}: {', '.join(files)}")
     return 0
 
 
@@ -277,9 +287,9 @@ speed of the first link at its first clamped frequency.
 
 output: with --out DIR, nothing is written unless the run succeeds; then DIR (new, or
 an empty directory) receives result.npz (SimulationResult.load), summary.json (what
---json prints), timeseries.csv and tracking.png, all at once (written beside it and
-renamed into place). Metrics that are undefined (corners after a short run's end) are
-null in JSON.
+--json prints), timeseries.csv and tracking.png (tracking.pdf, tracking.svg with
+--format), all at once (written beside it and renamed into place). Metrics that are
+undefined (corners after a short run's end) are null in JSON.
 
 exit status: 0 success; 1 the simulation diverged (one line on stderr with the time;
 nothing is written: run it from Python to get SimulationError.result, the partial
@@ -302,7 +312,8 @@ def add_parser(sub: Any) -> None:
         type=_controller_option,
         metavar="|".join((*CONTROLLERS, "MODULE:FACTORY")),
         help="pd: the paper's Jacobian-transpose PD gains from the first link's first "
-        "frequency (default); jt-pd: JacobianTransposePD with the scenario's kp, kd; "
+        "frequency (default); jt-pd: the same law with the scenario's kp, kd (named pd in "
+        "the results); "
         "joint-pd: JointPD; fuzzy: the paper's gains with the fuzzy adaptive law "
         "(FuzzyAdaptiveJTPD; set ks and law in the scenario file); lqg: observer-based "
         "LQG from the sensor alone with rigid feedforward; reflected: PD on the reflected "
@@ -385,5 +396,6 @@ def add_parser(sub: Any) -> None:
         help="write an animation of the deflected arm (25 frames per simulated second; GIF "
         "through Pillow, MP4 through ffmpeg, which must be on PATH)",
     )
+    add_figure_options(sim)
     sim.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
     sim.set_defaults(func=_cmd_simulate)

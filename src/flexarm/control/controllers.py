@@ -175,6 +175,8 @@ class Controller:
     """
 
     name = "controller"
+    """The law's name in results, figures and reports: the name that selects it on the
+    command line (``pd``, ``joint-pd``, ``fuzzy``, ``lqg``, ``reflected``)."""
     feedforward = False
     """Whether :func:`flexarm.simulate` adds the reference's rigid feedforward torques to
     this law's output by default (its ``feedforward=None``)."""
@@ -347,7 +349,7 @@ class JacobianTransposePD(Controller):
 
     kp: ArrayLike = 150.79
     kd: ArrayLike = 17.364
-    name = "jt-pd"
+    name = "pd"  # the paper's law (``--controller jt-pd`` is the same law with your gains)
 
     def __post_init__(self) -> None:
         for gain in ("kp", "kd"):  # checked now, not at the first run

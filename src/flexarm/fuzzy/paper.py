@@ -9,6 +9,7 @@ from numpy.typing import NDArray
 
 from .._validation import check_int, check_option
 from ..errors import InvalidTypeError, InvalidValueError
+from ..figures import SINGLE_COLUMN, new_figure, styled
 from .compiled import evaluate_many
 from .sets import LeftShoulder, RightShoulder, Rule, Triangle, Variable
 from .system import DEFUZZIFIERS, FuzzySystem
@@ -77,6 +78,7 @@ _PAPER_LABELS = {"delta1": "δ1 (m)", "delta2": "δ2 (m)", "lambda": "λ (-)"}
 """Axis labels of the paper's variables: link deformations in m, λ dimensionless."""
 
 
+@styled
 def plot_surface(
     fls: FuzzySystem,
     ax: Axes | None = None,
@@ -91,8 +93,9 @@ def plot_surface(
     fls : FuzzySystem
         A system with exactly two inputs.
     ax : matplotlib Axes, optional
-        A 3-D axes gets a surface, a 2-D axes a filled contour. ``None`` makes a
-        new figure with a 3-D axes.
+        A 3-D axes gets a surface, a 2-D axes a filled contour (with a colour bar
+        labelled with the output). ``None`` makes a new figure with a 3-D axes, one
+        column of a paper wide (not registered with pyplot).
     n : int
         Grid points per input.
     labels : tuple of str, optional
@@ -124,8 +127,6 @@ def plot_surface(
             "The 'labels' parameter of plot_surface must be three str (x, y, z). "
             f"Got {labels!r} instead."
         )
-    import matplotlib.pyplot as plt
-
     g1 = np.linspace(*fls.inputs[0].universe, n)
     g2 = np.linspace(*fls.inputs[1].universe, n)
     x1, x2 = np.meshgrid(g1, g2, indexing="ij")
@@ -136,14 +137,19 @@ def plot_surface(
     else:
         z = evaluate_many(packed, np.column_stack([x1.ravel(), x2.ravel()])).reshape(x1.shape)
     if ax is None:
-        ax = plt.figure().add_subplot(projection="3d")
+        ax = new_figure(SINGLE_COLUMN, 3.0).add_subplot(projection="3d")
     artist: Artist
     if ax.name == "3d":
         ax3d = cast(Any, ax)  # mpl_toolkits' Axes3D carries no type information
-        artist = ax3d.plot_surface(x1, x2, z, cmap="viridis")
-        ax3d.set_zlabel(labels[2])
+        artist = ax3d.plot_surface(x1, x2, z, cmap="viridis", lw=0, antialiased=False)
+        ax3d.set_xlabel(labels[0], labelpad=-2)
+        ax3d.set_ylabel(labels[1], labelpad=-2)
+        ax3d.set_zlabel(labels[2], labelpad=-2)
+        ax3d.tick_params(pad=-1)
+        ax3d.set_box_aspect(None, zoom=0.9)  # room for the labels in a narrow figure
     else:
         artist = ax.contourf(x1, x2, z, levels=20, cmap="viridis")
-    ax.set_xlabel(labels[0])
-    ax.set_ylabel(labels[1])
+        ax.figure.colorbar(artist, ax=ax, label=labels[2])
+        ax.set_xlabel(labels[0])
+        ax.set_ylabel(labels[1])
     return ax, artist

@@ -17,6 +17,7 @@ from .._validation import check_array, check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from .accumulators import Smoothing
 from .accumulators.base import CALLABLE
+from .accumulators.series import auto_series
 from .bandwidth import as_rule
 from .kernels import KERNELS
 from .options import BINNABLE
@@ -130,10 +131,25 @@ def _binned(value: Any, code: int, d: int, has_grid: bool, owner: str) -> float 
     return r
 
 
-def _series(value: Any, code: int, d: int, decay: float, binned: float | None, owner: str) -> bool:
+def _series(
+    value: Any,
+    code: int,
+    decay: float,
+    binned: float | None,
+    grid: F64 | None,
+    bw: F64,
+    owner: str,
+) -> bool:
+    """``series`` resolved: ``"auto"`` is the series where it applies and is faster."""
+    d = bw.shape[0]
+    if isinstance(value, str):
+        if value != "auto":
+            raise _fail(owner, "series", "True, False or 'auto'", repr(value))
+        applies = code == 0 and d == 1 and decay == 0.0 and binned is None
+        return applies and auto_series(grid, float(bw[0]))
     if not isinstance(value, bool | np.bool_):
         raise InvalidTypeError(
-            f"The 'series' parameter of {owner} must be a bool. Got {value!r} instead."
+            f"The 'series' parameter of {owner} must be a bool or 'auto'. Got {value!r} instead."
         )
     if not value:
         return False
@@ -157,6 +173,7 @@ def smoothing(
     X: F64 | None = None,
     d: int | None = None,
     bandwidth: F64 | None = None,
+    source: str | None = None,
 ) -> Smoothing:
     """Validate the hyperparameters ``params`` into the estimate's :class:`Smoothing`.
 
@@ -177,12 +194,28 @@ def smoothing(
         Input dimension when ``X`` is not given (with ``bandwidth``).
     bandwidth : ndarray, shape (d,), optional
         The resolved ``h_1`` (when restoring a saved state: no rule is evaluated).
+    source : str, optional
+        With ``d`` and without ``X`` or ``bandwidth``: what the samples come
+        from (e.g. "a Dask array"), named when a bandwidth rule, which needs
+        every sample at once, is refused.
     """
     dim = X.shape[1] if X is not None else d
     assert dim is not None
     code = _kernel(params["kernel"], owner)
     decay = _decay(params, dim, owner, fixed_decay)
-    if bandwidth is None:
+    if bandwidth is None and X is None:
+        value = params["bandwidth"]
+        if as_rule(value, owner) is not None:
+            raise _fail(
+                owner,
+                "bandwidth",
+                f"a number to fit from {source} (a rule such as 'silverman' needs every "
+                "sample at once; compute it with silverman_bandwidth(X_part, decay, n=n_total) "
+                "and pass the value)",
+                repr(value),
+            )
+        bw = _bandwidth(value, np.zeros((1, dim)), decay, owner)
+    elif bandwidth is None:
         assert X is not None
         bw = _bandwidth(params["bandwidth"], X, decay, owner)
     else:
@@ -196,7 +229,7 @@ def smoothing(
             raise _fail(owner, "grid", "non-empty", "0 points")
         grid = grid.copy()
     r = _binned(params.get("binned"), code, dim, grid is not None, owner)
-    series = _series(params.get("series", False), code, dim, decay, r, owner)
+    series = _series(params.get("series", False), code, decay, r, grid, bw, owner)
     setup = Smoothing(owner, params["kernel"], code, bw, decay, recursive, grid, r, series)
     if code == CALLABLE:  # fail early on a kernel that returns the wrong shape
         probe = np.zeros((3, dim))

@@ -39,6 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_int, check_real, check_rng
 from ..errors import InvalidValueError
+from ..figures import DOUBLE_COLUMN, new_figure, styled
 from .arx import fit_structure
 from .correlated import normalise
 from .hatbasis import evaluate, locate
@@ -104,8 +105,10 @@ class Bands:
             "impulse_band_max_width": float(np.max(self.impulse_high - self.impulse_low)),
         }
 
+    @styled
     def plot(self, fig: Figure | None = None, *, u_label: str = "u (data units)") -> Figure:
-        """Two panels: ``phi`` and the impulse response, each with its band.
+        """Two panels: ``phi`` and the impulse response, each with its band (two columns
+        of a paper wide).
 
         Parameters
         ----------
@@ -119,21 +122,20 @@ class Bands:
         matplotlib.figure.Figure
         """
         if fig is None:
-            from matplotlib.figure import Figure
-
-            fig = Figure(figsize=(10, 4), layout="constrained")
+            fig = new_figure(DOUBLE_COLUMN, 2.5)
         ax1, ax2 = fig.subplots(1, 2)
         pct = f"{100 * self.level:g} % band"
         draw_phi_band(ax1, self)
-        ax1.plot(self.grid, self.phi, lw=2, label="estimate")
-        ax1.set(xlabel=u_label, ylabel="nonlinearity phi (normalised)")
-        ax1.legend(fontsize=8)
+        ax1.plot(self.grid, self.phi, lw=1.5, label="estimate")
+        ax1.set(xlabel=u_label, ylabel="φ(u) (normalised)")
+        ax1.set_title("nonlinearity")
+        ax1.legend(loc="best")
         k = np.arange(self.impulse.shape[0])
         draw_impulse_band(ax2, self)
-        ax2.plot(k, self.impulse, "o-", ms=3, lw=1, label="estimate")
-        ax2.set(xlabel="lag k (samples)", ylabel="impulse response (per phi unit)")
-        ax2.set_title(f"{pct}, {self.n_boot} block-bootstrap replicates", fontsize=9)
-        ax2.legend(fontsize=8)
+        ax2.plot(k, self.impulse, "o-", ms=2.5, label="estimate")
+        ax2.set(xlabel="lag k (samples)", ylabel="$\\lambda_k$ (per φ unit)")
+        ax2.set_title(f"impulse response\n{pct}, {self.n_boot} block-bootstrap replicates")
+        ax2.legend(loc="best")
         return fig
 
 

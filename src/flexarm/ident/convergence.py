@@ -57,6 +57,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._io import atomic_path
 from .._validation import check_array, check_int, check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
+from ..figures import SINGLE_COLUMN, FigureFormat, new_figure, save_figure, style, styled
 from .bandwidth import Silverman, as_rule
 from .options import DISTRIBUTIONS
 from .regression import SemiRecursiveKernelRegression
@@ -216,8 +217,10 @@ class ConvergenceResult:
             "settings": dict(self.settings),
         }
 
+    @styled
     def plot(self, ax: Axes | None = None) -> Axes:
-        """Log–log MISE against ``n`` with the fitted line and the theoretical slope.
+        """Log–log MISE against ``n`` with the fitted line and the theoretical slope
+        (one column of a paper wide).
 
         The theoretical line has slope ``-2p/(2p+1)`` through the geometric
         centre of the measured points. Matplotlib is imported lazily; nothing
@@ -233,11 +236,11 @@ class ConvergenceResult:
         matplotlib.axes.Axes
         """
         if ax is None:
-            from matplotlib.figure import Figure
-
-            ax = Figure(figsize=(6, 4.5), layout="constrained").add_subplot()
+            ax = new_figure(SINGLE_COLUMN, 2.8).add_subplot()
         n = self.n.astype(float)
-        ax.errorbar(n, self.mise, yerr=self.std, fmt="o", capsize=3, label="MISE (± std of ISE)")
+        ax.errorbar(
+            n, self.mise, yerr=self.std, fmt="o", ms=3, capsize=2, label="MISE (± std of ISE)"
+        )
         ax.plot(
             n,
             np.exp(self.intercept) * n**self.slope,
@@ -253,35 +256,47 @@ class ConvergenceResult:
         )
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.set_xticks(n, [f"{v:g}" for v in self.n], minor=False)  # ticks at the sizes run
+        ax.set_xticks([], minor=True)
         ax.set_xlabel("n (samples)")
-        ax.set_ylabel("MISE")
+        ax.set_ylabel("MISE (-)")  # the study's functions and noise are dimensionless
         ax.set_title(f"{self.settings.get('function', 'm')}: p = {self.order:g}")
         ax.legend()
         return ax
 
-    def save(self, directory: str | os.PathLike[str]) -> list[Path]:
+    def save(
+        self,
+        directory: str | os.PathLike[str],
+        *,
+        figure_format: FigureFormat | str | None = None,
+    ) -> list[Path]:
         """Write ``study.csv`` (columns ``n,mise,std``) and ``study.png`` into ``directory``.
 
         Each file is written atomically; the directory is created if needed.
+
+        Parameters
+        ----------
+        directory : str or path-like
+        figure_format : FigureFormat or str, optional
+            The figure's format and resolution (default PNG,
+            :class:`flexarm.figures.FigureFormat`): ``study.pdf`` with ``"pdf"``.
 
         Returns
         -------
         list of Path
             The files written.
         """
-        from matplotlib.figure import Figure
-
         out = Path(directory)
         out.mkdir(parents=True, exist_ok=True)
-        paths = [out / "study.csv", out / "study.png"]
+        csv = out / "study.csv"
         header, table = self.table()
-        with atomic_path(paths[0]) as tmp:
+        with atomic_path(csv) as tmp:
             np.savetxt(tmp, table, fmt="%.10g", delimiter=",", header=",".join(header), comments="")
-        fig = Figure(figsize=(6, 4.5), layout="constrained")
-        self.plot(ax=fig.add_subplot())
-        with atomic_path(paths[1]) as tmp:
-            fig.savefig(tmp, format="png", dpi=100)
-        return paths
+        fig = new_figure(SINGLE_COLUMN, 2.8)
+        with style():  # the axes, its ticks and labels in the style too
+            ax = fig.add_subplot()
+        self.plot(ax)
+        return [csv, save_figure(fig, out / "study", figure_format)]
 
 
 def _progress_bar(total: int, enabled: bool) -> Callable[[int], None]:

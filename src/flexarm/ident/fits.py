@@ -9,7 +9,10 @@
 ``flexarm identify fit`` and ``flexarm identify hammerstein DATA`` are these
 functions on two columns of a file (:func:`flexarm.ident.data.read_xy`).
 Plots take ``ax=None`` (or ``fig=None``), return the handles and never show
-anything; Matplotlib is imported when a plot is drawn.
+anything; they draw in :mod:`flexarm.figures`' style, sized for a column of a
+paper, and ``save`` writes them as PNG, PDF or SVG
+(:class:`~flexarm.figures.FigureFormat`). Matplotlib is imported when a plot is
+drawn.
 """
 
 from __future__ import annotations
@@ -26,6 +29,15 @@ from .._budget import check_memory
 from .._io import atomic_path
 from .._validation import check_array, check_int
 from ..errors import InvalidValueError
+from ..figures import (
+    DOUBLE_COLUMN,
+    SINGLE_COLUMN,
+    FigureFormat,
+    new_figure,
+    save_figure,
+    style,
+    styled,
+)
 from .bandwidth import Silverman, as_rule
 from .bootstrap import Bands
 from .correlation import KnownPoints
@@ -40,7 +52,11 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["HammersteinFit", "RegressionFit", "fit_hammerstein", "fit_regression"]
 
 F64 = NDArray[np.float64]
-_PLOT_POINTS = 5000  # data points drawn at most (every k-th)
+_DENSITY_ABOVE = 2000
+"""Data drawn as points up to this many samples, as a density of hexagonal bins above
+(a cloud of thousands of points hides its own shape)."""
+_FREE_RUN_WINDOW = 200
+"""Samples of the free run drawn beside the measured output (the fit is over all)."""
 
 
 def _xy(x: ArrayLike, y: ArrayLike, owner: str, names: tuple[str, str]) -> tuple[F64, F64]:
@@ -57,17 +73,6 @@ def _xy(x: ArrayLike, y: ArrayLike, owner: str, names: tuple[str, str]) -> tuple
             "Got a constant instead."
         )
     return np.asarray(xa, dtype=np.float64), np.asarray(ya, dtype=np.float64)
-
-
-def _new_figure(figsize: tuple[float, float]) -> Figure:
-    from matplotlib.figure import Figure
-
-    return Figure(figsize=figsize, layout="constrained")
-
-
-def _write_png(fig: Figure, path: Path) -> None:
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=100)
 
 
 def _write_csv(path: Path, columns: list[F64], header: str) -> None:
@@ -138,8 +143,13 @@ class RegressionFit:
             "estimate": {"x": self.grid.tolist(), "m": self.estimate.tolist()},
         }
 
+    @styled
     def plot(self, ax: Axes | None = None) -> Axes:
-        """The data (at most 5000 points) and the estimate on the grid.
+        """The data and the estimate on the grid (one column of a paper wide).
+
+        Up to 2000 samples are drawn as points; more as their density (grey
+        hexagonal bins, darker where more samples fall), so that the cloud does
+        not hide its shape.
 
         Parameters
         ----------
@@ -151,24 +161,36 @@ class RegressionFit:
         matplotlib.axes.Axes
         """
         if ax is None:
-            ax = _new_figure((7, 4.5)).add_subplot()
-        step = max(1, self.x.shape[0] // _PLOT_POINTS)
-        ax.plot(self.x[::step], self.y[::step], ".", ms=2, alpha=0.4, color="0.5", label="data")
-        ax.plot(self.grid, self.estimate, "-", lw=2, label="estimate m_n(x)")
+            ax = new_figure(SINGLE_COLUMN, 2.6).add_subplot()
+        _draw_data(ax, self.x, self.y)
+        ax.plot(self.grid, self.estimate, "-", lw=1.5, label="estimate $m_n(x)$")
         ax.set_xlabel(f"{self.x_label} ({self.x_unit})")
         ax.set_ylabel(f"{self.y_label} ({self.y_unit})")
         est = self.estimator
         ax.set_title(
-            f"{est.kernel_} kernel, h_1 = {float(est.bandwidth_[0]):.4g} {self.x_unit}, "
-            f"decay {est.decay:g}, n = {self.x.shape[0]}"
+            f"{est.kernel_} kernel, $h_1$ = {float(est.bandwidth_[0]):.3g}, "
+            f"decay {est.decay:g}, n = {self.x.shape[0]}",
+            fontsize="small",
         )
-        ax.legend()
+        ax.legend(loc="best")
         return ax
 
-    def save(self, directory: str | os.PathLike[str]) -> list[Path]:
+    def save(
+        self,
+        directory: str | os.PathLike[str],
+        *,
+        figure_format: FigureFormat | str | None = None,
+    ) -> list[Path]:
         """Write ``estimate.csv`` (columns ``x,m``) and ``estimate.png`` into ``directory``.
 
         Each file is written atomically; the directory is created if needed.
+
+        Parameters
+        ----------
+        directory : str or path-like
+        figure_format : FigureFormat or str, optional
+            The figure's format and resolution (default PNG,
+            :class:`flexarm.figures.FigureFormat`): ``estimate.pdf`` with ``"pdf"``.
 
         Returns
         -------
@@ -177,12 +199,25 @@ class RegressionFit:
         """
         out = Path(directory)
         out.mkdir(parents=True, exist_ok=True)
-        paths = [out / "estimate.csv", out / "estimate.png"]
-        _write_csv(paths[0], [self.grid, self.estimate], "x,m")
-        fig = _new_figure((7, 4.5))
-        self.plot(fig.add_subplot())
-        _write_png(fig, paths[1])
-        return paths
+        csv = out / "estimate.csv"
+        _write_csv(csv, [self.grid, self.estimate], "x,m")
+        fig = new_figure(SINGLE_COLUMN, 2.6)
+        with style():  # the axes, its ticks and labels in the style too
+            ax = fig.add_subplot()
+        self.plot(ax)
+        return [csv, save_figure(fig, out / "estimate", figure_format)]
+
+
+def _draw_data(ax: Axes, x: F64, y: F64) -> None:
+    """The samples as points, or as their density when there are many (:data:`_DENSITY_ABOVE`)."""
+    n = x.shape[0]
+    if n <= _DENSITY_ABOVE:
+        ax.plot(x, y, ".", ms=2.5, mew=0, alpha=0.5, color="0.45", label="data", zorder=1)
+        return
+    ax.hexbin(
+        x, y, gridsize=(50, 25), bins="log", mincnt=1, cmap="Greys", alpha=0.6, lw=0, zorder=1
+    )
+    ax.plot([], [], "h", ms=5, color="0.55", label=f"data: density of {n} samples")
 
 
 def fit_regression(
@@ -325,10 +360,12 @@ class HammersteinFit:
             "nonlinearity": {"x": self.grid.tolist(), "phi": self.phi.tolist()},
         }
 
+    @styled
     def plot(self, fig: Figure | None = None) -> Figure:
         """Three panels: the nonlinearity, the impulse response (with their bootstrap bands
         when computed), and the measured output beside the model's and the linear
-        baseline's free runs.
+        baseline's free runs over the first 200 samples (the fit percentages are over
+        all of them). Two columns of a paper wide.
 
         Parameters
         ----------
@@ -342,29 +379,32 @@ class HammersteinFit:
         from .bootstrap import draw_impulse_band, draw_phi_band
 
         if fig is None:
-            fig = _new_figure((11, 4))
+            fig = new_figure(DOUBLE_COLUMN, 2.5)
         ax1, ax2, ax3 = fig.subplots(1, 3)
-        scale = "phi units" if self.model.known_points is not None else "normalised"
+        scale = "φ units" if self.model.known_points is not None else "normalised"
         if self.bands is not None:
             draw_phi_band(ax1, self.bands)
             draw_impulse_band(ax2, self.bands)
-        ax1.plot(self.grid, self.phi, lw=2, label="estimate")
+        ax1.plot(self.grid, self.phi, lw=1.5, label="estimate")
         ax1.set_xlabel(f"{self.u_label} ({self.u_unit})")
-        ax1.set_ylabel(f"identified nonlinearity phi ({scale})")
-        ax1.set_title(f"{self.normalisation}; {self.model.method_}-input path", fontsize=9)
+        ax1.set_ylabel(f"φ(u) ({scale})")
+        ax1.set_title(f"nonlinearity, {self.normalisation}\n({self.model.method_}-input path)")
         ir = self.model.impulse_response_
-        ax2.plot(np.arange(ir.shape[0]), ir, "o-", ms=3, lw=1, label="estimate")
+        ax2.plot(np.arange(ir.shape[0]), ir, "o-", ms=2.5, label="estimate")
         ax2.set_xlabel("lag k (samples)")
-        ax2.set_ylabel(f"impulse response lambda_k ({self.y_unit} per phi unit)")
-        ax2.set_title(f"impulse response (ARMA order {self.model.order_})", fontsize=9)
+        ax2.set_ylabel(f"$\\lambda_k$ ({self.y_unit} per φ unit)")
+        ax2.set_title(f"impulse response\n(ARMA order {self.model.order_})")
         if self.bands is not None:
-            ax1.legend(fontsize=8)
-            ax2.legend(fontsize=8)
-        shown = slice(0, min(self.u.shape[0], 2000))
+            ax1.legend(loc="best")
+            ax2.legend(loc="best")
+        n = self.u.shape[0]
+        shown = slice(0, min(n, _FREE_RUN_WINDOW))
+        k = np.arange(n)[shown]
         base = self.model.report_.baseline
-        ax3.plot(self.y[shown], lw=1, color="k", label="measured")
-        ax3.plot(self.y_hat[shown], lw=1, label=f"Hammerstein ({self.fit_percent:.1f} %)")
+        ax3.plot(k, self.y[shown], color="k", lw=0.8, label="measured")
+        ax3.plot(k, self.y_hat[shown], lw=1.0, label=f"Hammerstein ({self.fit_percent:.1f} %)")
         ax3.plot(
+            k,
             self.y_baseline[shown],
             lw=0.8,
             ls="--",
@@ -372,14 +412,26 @@ class HammersteinFit:
         )
         ax3.set_xlabel("n (samples)")
         ax3.set_ylabel(f"{self.y_label} ({self.y_unit})")
-        ax3.set_title("free run on the data", fontsize=9)
-        ax3.legend(fontsize=8)
+        ax3.set_title(f"free run on the data\n(first {k.shape[0]} of {n} samples)")
+        ax3.legend(loc="best")
         return fig
 
-    def save(self, directory: str | os.PathLike[str]) -> list[Path]:
+    def save(
+        self,
+        directory: str | os.PathLike[str],
+        *,
+        figure_format: FigureFormat | str | None = None,
+    ) -> list[Path]:
         """Write ``nonlinearity.csv`` (``u,phi``), ``impulse_response.csv``
         (``lag,impulse_response``; with bands, ``u,phi,phi_low,phi_high`` and
         ``lag,impulse_response,low,high``) and ``hammerstein.png`` into ``directory``.
+
+        Parameters
+        ----------
+        directory : str or path-like
+        figure_format : FigureFormat or str, optional
+            The figure's format and resolution (default PNG,
+            :class:`flexarm.figures.FigureFormat`): ``hammerstein.svg`` with ``"svg"``.
 
         Returns
         -------
@@ -388,7 +440,7 @@ class HammersteinFit:
         """
         out = Path(directory)
         out.mkdir(parents=True, exist_ok=True)
-        paths = [out / "nonlinearity.csv", out / "impulse_response.csv", out / "hammerstein.png"]
+        paths = [out / "nonlinearity.csv", out / "impulse_response.csv"]
         ir = self.model.impulse_response_
         lags = np.arange(ir.shape[0], dtype=np.float64)
         b = self.bands
@@ -400,7 +452,7 @@ class HammersteinFit:
             _write_csv(
                 paths[1], [lags, ir, b.impulse_low, b.impulse_high], "lag,impulse_response,low,high"
             )
-        _write_png(self.plot(), paths[2])
+        paths.append(save_figure(self.plot(), out / "hammerstein", figure_format))
         return paths
 
 

@@ -171,7 +171,7 @@ SERIES_TRUNCATION = 2.7e-17
 SERIES_REACH = 38.61 + 0.0625
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def gauss_series_moments(
     x: F64, y: F64, scale: float, origin: float, h: float, mn: F64, md: F64
 ) -> None:  # pragma: no cover - compiled
@@ -213,7 +213,7 @@ def gauss_series_moments(
             ey *= b
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def gauss_series_eval(
     q: F64, origin: float, h: float, mn: F64, md: F64
 ) -> tuple[F64, F64, F64]:  # pragma: no cover - compiled

@@ -20,25 +20,36 @@ The estimator validates its hyperparameters into a constant
 keeps the streaming state (:mod:`flexarm.ident.accumulators`, one per mode):
 
 * **exact** (``grid=None``): the samples are stored;
-  :meth:`~SemiRecursiveKernelRegression.predict` evaluates eq. 14 at any point (with
-  ``series=True``, by the Gaussian series);
+  :meth:`~SemiRecursiveKernelRegression.predict` evaluates eq. 14 at any point (by the
+  Gaussian series where ``series`` selects it);
 * **grid** (``grid`` given): running sums ``numerator_`` and ``denominator_``
   at the grid points; :meth:`~SemiRecursiveKernelRegression.predict` accepts grid points
   only;
 * **binned** (``grid`` and ``binned=r``, ``d = 1``): linear binning, with the
   error bound of :mod:`flexarm.ident.binning`
   (:meth:`~SemiRecursiveKernelRegression.error_bound`);
-* **series** (``grid`` and ``series=True``: Gaussian, one bandwidth,
-  ``d = 1``): cluster moments of a fast Gauss transform, ``O(n + m)`` work,
-  equal to direct summation to rounding.
+* **series** (``grid``, Gaussian, one bandwidth, ``d = 1``; chosen by the
+  default ``series="auto"``, or ``series=True``): cluster moments of a fast
+  Gauss transform, ``O(n + m)`` work, equal to direct summation to rounding
+  (to ``2e-13`` of the weighted mean ``|Y|``; bit for bit far from the data).
 
 Chunked ``partial_fit`` equals ``fit`` bit for bit in every mode, and exact
-mode equals grid mode bit for bit at the grid points (the tests also hold both
-to a direct NumPy evaluation of eq. 14, to ~1e-11).
+mode equals grid mode bit for bit at the grid points with ``series=False``
+(the tests also hold both to a direct NumPy evaluation of eq. 14, to ~1e-11):
+the sums run in the blocked order of :mod:`flexarm.ident.accumulators.blocks`.
+
+At scale
+--------
+:meth:`~SemiRecursiveKernelRegression.fit_chunks` fits from any iterator of
+``(X, y)`` chunks, and :meth:`~SemiRecursiveKernelRegression.fit` /
+:meth:`~SemiRecursiveKernelRegression.partial_fit` accept Dask arrays (summed
+per block on Dask's workers, combined in order on the client); both equal the
+in-memory fit bit for bit, in memory bounded by a few chunks outside exact
+mode (:mod:`flexarm.ident.chunked`).
 
 :meth:`~SemiRecursiveKernelRegression.save` writes the hyperparameters and the
 accumulator's :meth:`~flexarm.ident.accumulators.Accumulator.state` — one
-description, plain arrays — to one ``.npz`` file;
+description, plain arrays (:mod:`flexarm.ident._persist`) — to one ``.npz`` file;
 :meth:`~SemiRecursiveKernelRegression.load` rebuilds the estimator and its
 accumulator from it (:meth:`~flexarm.ident.accumulators.Accumulator.from_state`),
 and continuing with ``partial_fit`` gives bit for bit what never stopping
@@ -60,18 +71,20 @@ from __future__ import annotations
 
 import copy
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any, ClassVar, Self
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._io import atomic_path
-from ..errors import InvalidTypeError, InvalidValueError
+from ..errors import InvalidValueError
 from ._params import HyperParameters, same_value
+from ._persist import estimator_state, hyperparameters
 from ._setup import check_X, check_Xy, smoothing
 from .accumulators import Accumulator, BinnedSums, ExactSamples, GridAccumulator, State, choose
-from .bandwidth import Silverman, as_rule
+from .bandwidth import Silverman
+from .chunked import fit_dask, fit_iterable, is_dask
 from .kernels import KernelFunction
 
 __all__ = [
@@ -82,7 +95,6 @@ __all__ = [
 ]
 
 F64 = NDArray[np.float64]
-_FORMAT = 1  # version of the save() file layout
 #: A bandwidth: ``h_1`` (one value, or one per input dimension), a rule name or a rule.
 Bandwidth = float | ArrayLike | str | Silverman
 
@@ -113,11 +125,13 @@ class _KernelRegression(HyperParameters):
         d: int | None = None,
         bandwidth: F64 | None = None,
         state: Mapping[str, NDArray[Any]] | None = None,
+        source: str | None = None,
     ) -> None:
         """Validate the hyperparameters (on the first samples ``X``) and set up the state.
 
         To restore a saved estimator give ``d``, the resolved ``bandwidth`` and
-        the accumulator's ``state`` instead of ``X``.
+        the accumulator's ``state`` instead of ``X``; to fit from chunks or a
+        Dask array, ``d`` and the ``source`` (no bandwidth rule then).
         """
         setup = smoothing(
             self.get_params(),
@@ -127,6 +141,7 @@ class _KernelRegression(HyperParameters):
             X=X,
             d=d,
             bandwidth=bandwidth,
+            source=source,
         )
         self._frozen = {
             k: copy.deepcopy(v) if isinstance(v, np.ndarray | list | tuple) else v
@@ -147,21 +162,67 @@ class _KernelRegression(HyperParameters):
     def fit(self, X: ArrayLike, y: ArrayLike) -> Self:
         """Forget any previous state and fit to the samples.
 
+        ``X`` and ``y`` may be Dask arrays (:mod:`flexarm.ident.chunked`): the
+        chunks are summed on Dask's workers and combined in order, bit for bit
+        as the in-memory fit, in bounded memory outside exact mode. A bandwidth
+        rule is refused then (it needs every sample at once).
+
         Parameters
         ----------
-        X : array_like, shape (n,) or (n, d)
+        X : array_like or dask array, shape (n,) or (n, d)
             Inputs ``X_i`` (units of the regressor); shape ``(n,)`` means ``d = 1``.
-        y : array_like, shape (n,)
+        y : array_like or dask array, shape (n,)
             Outputs ``Y_i`` (units of the response).
 
         Returns
         -------
         self
         """
-        Xa, ya = check_Xy(X, y, self._owner)
         self.__dict__.pop("_acc", None)
+        if is_dask(X) or is_dask(y):
+            return self._guarded(lambda: fit_dask(self._begin, X, y, self._owner))
+        Xa, ya = check_Xy(X, y, self._owner)
         self._start(Xa)
         self._acc.add_chunk(Xa, ya)
+        return self
+
+    def fit_chunks(self, chunks: Iterable[tuple[ArrayLike, ArrayLike]]) -> Self:
+        """Forget any previous state and fit to the samples of an iterator of chunks.
+
+        The same estimate, bit for bit, as :meth:`fit` on the concatenated
+        samples (and as :meth:`partial_fit` on each chunk in turn), holding one
+        chunk at a time: bounded memory in the grid, binned and series modes.
+        A bandwidth rule is refused (it needs every sample at once).
+
+        Parameters
+        ----------
+        chunks : iterable of (X, y)
+            ``X`` of shape ``(m,)`` or ``(m, d)`` (units of the regressor), ``y``
+            of shape ``(m,)`` (units of the response); ``m`` may vary from chunk
+            to chunk. A generator is consumed once.
+
+        Returns
+        -------
+        self
+        """
+        self.__dict__.pop("_acc", None)
+        return self._guarded(lambda: fit_iterable(self._begin, chunks, self._owner))
+
+    def _begin(self, d: int, source: str) -> Accumulator:
+        """The accumulator to continue (``partial_fit``), or a new one for ``d`` inputs."""
+        if "_acc" in self.__dict__:
+            self._check_continuation(d)
+        else:
+            self._start(d=d, source=source)
+        return self._acc
+
+    def _guarded(self, run: Callable[[], Accumulator]) -> Self:
+        """Run a chunked fit; on an error the estimator is left unfitted."""
+        try:
+            run()
+        except BaseException:
+            self.__dict__.pop("_acc", None)
+            raise
         return self
 
     def partial_fit(self, X: ArrayLike, y: ArrayLike) -> Self:
@@ -171,36 +232,46 @@ class _KernelRegression(HyperParameters):
         evaluated on its samples); changing them before a later call raises
         ``ValueError`` (call :meth:`fit` to start again).
 
+        ``X`` and ``y`` may be Dask arrays (as in :meth:`fit`); if a chunk turns
+        out bad (e.g. NaN), the chunks combined before it stay added.
+
         Parameters
         ----------
-        X : array_like, shape (n,) or (n, d)
+        X : array_like or dask array, shape (n,) or (n, d)
             Inputs ``X_i`` (units of the regressor).
-        y : array_like, shape (n,)
+        y : array_like or dask array, shape (n,)
             Outputs ``Y_i`` (units of the response).
 
         Returns
         -------
         self
         """
+        if is_dask(X) or is_dask(y):
+            fit_dask(self._begin, X, y, self._owner)
+            return self
         Xa, ya = check_Xy(X, y, self._owner)
         if "_acc" not in self.__dict__:
             self._start(Xa)
         else:
-            d = self._acc.setup.d
-            if Xa.shape[1] != d:
-                raise InvalidValueError(
-                    f"The 'X' parameter of {self._owner} must be of {d} column(s) as before. "
-                    f"Got {Xa.shape[1]} instead."
-                )
-            now = self.get_params()
-            changed = sorted(k for k in now if not same_value(now[k], self._frozen[k]))
-            if changed:
-                raise InvalidValueError(
-                    f"The {changed} parameter(s) of {self._owner} changed since the first "
-                    "partial_fit. Got new values instead; call fit to start again."
-                )
+            self._check_continuation(Xa.shape[1])
         self._acc.add_chunk(Xa, ya)
         return self
+
+    def _check_continuation(self, d_new: int) -> None:
+        """``partial_fit`` after the first call: same ``d``, unchanged hyperparameters."""
+        d = self._acc.setup.d
+        if d_new != d:
+            raise InvalidValueError(
+                f"The 'X' parameter of {self._owner} must be of {d} column(s) as before. "
+                f"Got {d_new} instead."
+            )
+        now = self.get_params()
+        changed = sorted(k for k in now if not same_value(now[k], self._frozen[k]))
+        if changed:
+            raise InvalidValueError(
+                f"The {changed} parameter(s) of {self._owner} changed since the first "
+                "partial_fit. Got new values instead; call fit to start again."
+            )
 
     # ---------------------------------------------------------------- fitted state
 
@@ -367,61 +438,12 @@ class _KernelRegression(HyperParameters):
 
     def _state(self) -> State:
         """The one state description: hyperparameters, then the accumulator's state."""
-        acc = self._check_fitted()
-        setup = acc.setup
-        if not isinstance(setup.kernel, str):
-            raise InvalidTypeError(
-                f"The 'kernel' parameter of {self._owner} must be a kernel name to save the "
-                f"estimator. Got {setup.kernel!r} instead."
-            )
-        given = self._frozen["bandwidth"]
-        rule = as_rule(given, self._owner)
-        state: State = {
-            "format": np.array(_FORMAT),
-            "estimator": np.array(self._owner),
-            "kernel": np.array(setup.kernel),
-            # the value given, or the rule's value (with the rule's name and factor below)
-            "bandwidth": setup.bandwidth
-            if rule is not None
-            else np.asarray(given, dtype=np.float64),
-            "decay": np.array(setup.decay),
-            "n_features_in": np.array(setup.d),
-            "series": np.array(setup.series),
-        }
-        if rule is not None:
-            state.update(bandwidth_rule=np.array(rule.name), bandwidth_factor=np.array(rule.factor))
-        if setup.grid is not None:
-            state["grid"] = setup.grid
-        if setup.binned is not None:
-            state["binned"] = np.array(setup.binned)
-        state.update(acc.state())
-        return state
+        return estimator_state(self._check_fitted(), self._owner, self._frozen)
 
     @classmethod
     def _from_state(cls, data: Mapping[str, NDArray[Any]]) -> Self:
-        if int(data.get("format", -1)) != _FORMAT or str(data.get("estimator")) != cls.__name__:
-            raise InvalidValueError(
-                f"The 'path' parameter of {cls.__name__}.load must name a file saved by "
-                f"{cls.__name__}.save. Got {data.get('estimator', 'another file')!s} instead."
-            )
-        bw = data["bandwidth"]
-        kwargs: dict[str, Any] = {
-            "kernel": str(data["kernel"]),
-            "bandwidth": float(bw) if bw.ndim == 0 else bw,
-            "grid": data.get("grid"),
-        }
-        if "bandwidth_rule" in data:
-            factor = float(data["bandwidth_factor"])
-            kwargs["bandwidth"] = "silverman" if factor == 1.0 else Silverman(factor)
-        if "decay" in cls._get_param_names():
-            kwargs["decay"] = float(data["decay"])
-        if "binned" in data:
-            kwargs["binned"] = float(data["binned"])
-        if bool(data.get("series", False)):
-            kwargs["series"] = True
+        kwargs, d, h1 = hyperparameters(data, cls.__name__, cls._get_param_names())
         est = cls(**kwargs)
-        d = int(data["n_features_in"])
-        h1 = np.broadcast_to(np.asarray(bw, dtype=np.float64), (d,))
         est._start(d=d, bandwidth=h1, state=data)
         return est
 
@@ -490,18 +512,23 @@ class SemiRecursiveKernelRegression(_KernelRegression):
         approximate grid mode (``d = 1``, continuous kernels) by linear binning
         with bins ``r h`` wide, with a proven error bound; see
         :mod:`flexarm.ident.binning`, :attr:`bin_error_` and :meth:`error_bound`.
-    series : bool, default False
-        Gaussian kernel with one bandwidth (``decay = 0``), ``d = 1``: compute
-        the kernel sums by a Taylor series about clusters ``h/8`` wide (a fast
-        Gauss transform, :func:`flexarm.ident.kernels.gauss_series_moments`),
-        ``O(n + m)`` instead of ``O(n m)``. Each weight keeps a relative error
-        of at most ~1e-13 (truncation 2.7e-17, cancellation), so the result
-        agrees with direct summation to rounding, but not bit for bit. Where
-        every direct weight is subnormal (``x`` farther than ~37.6 h from all
-        samples) the series, which rescales them, is the more accurate; it
-        gives NaN only beyond 38.67 h from every sample (direct: 38.61 h).
-        Grid mode keeps the cluster moments as its state (chunked
-        ``partial_fit`` equals ``fit`` bit for bit).
+    series : bool or "auto", default "auto"
+        Gaussian kernel with one bandwidth (``decay = 0``), ``d = 1``, not
+        binned: compute the kernel sums by a Taylor series about clusters
+        ``h/8`` wide (a fast Gauss transform,
+        :func:`flexarm.ident.kernels.gauss_series_moments`), ``O(n + m)``
+        instead of ``O(n m)``. At every point with a sample within 36.6 h the
+        estimate agrees with direct summation to ``2e-13 A / D`` (``A / D`` the
+        kernel-weighted mean of ``|Y_i|``; not bit for bit); farther out, where
+        the direct weights are subnormal or zero, it *is* the direct sum, bit
+        for bit (NaN past 38.61 h); see :mod:`flexarm.ident.accumulators.series`.
+        ``"auto"``: the series wherever it applies (exact mode: unless its
+        clusters outnumber the samples; grid mode: unless the grid spans more
+        than ~2000 bandwidths or a sample's window holds fewer than 8 grid
+        points), direct sums elsewhere. ``True`` insists (an error where it
+        does not apply); ``False``: direct sums (exact mode then equals grid
+        mode bit for bit). Grid mode keeps the cluster moments as its state
+        (chunked ``partial_fit`` equals ``fit`` bit for bit).
 
     Attributes
     ----------
@@ -540,7 +567,7 @@ class SemiRecursiveKernelRegression(_KernelRegression):
         decay: float = 0.2,
         grid: ArrayLike | None = None,
         binned: float | None = None,
-        series: bool = False,
+        series: bool | str = "auto",
     ) -> None:
         self.kernel = kernel
         self.bandwidth = bandwidth
@@ -567,7 +594,7 @@ class RecursiveKernelRegression(_KernelRegression):
         decay: float = 0.2,
         grid: ArrayLike | None = None,
         binned: float | None = None,
-        series: bool = False,
+        series: bool | str = "auto",
     ) -> None:
         self.kernel = kernel
         self.bandwidth = bandwidth
@@ -591,7 +618,7 @@ class NadarayaWatson(_KernelRegression):
         bandwidth: Bandwidth = 1.0,
         grid: ArrayLike | None = None,
         binned: float | None = None,
-        series: bool = False,
+        series: bool | str = "auto",
     ) -> None:
         self.kernel = kernel
         self.bandwidth = bandwidth

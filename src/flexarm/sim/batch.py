@@ -145,7 +145,7 @@ def iter_simulations(
                 if not pending:
                     break
                 finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for future in finished:
+                for future in sorted(finished, key=pending.__getitem__):  # runs in order
                     index = pending.pop(future)
                     exc = future.exception()
                     done_count += 1

@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._io import JSONValue, atomic_path, output_directory
 from ..errors import FlexarmError, InvalidValueError
+from ..figures import DOUBLE_COLUMN, FigureFormat, new_figure, save_figure, styled
 from ..model.arrays import ArmArrays
 from . import metrics as _m
 
@@ -29,10 +30,24 @@ if TYPE_CHECKING:
     from matplotlib.animation import FuncAnimation
     from matplotlib.figure import Figure
 
-__all__ = ["RESULT_FILES", "SimulationError", "SimulationResult", "assemble_result"]
+__all__ = [
+    "RESULT_FILES",
+    "SimulationError",
+    "SimulationResult",
+    "assemble_result",
+    "result_files",
+]
 
 RESULT_FILES = ("result.npz", "summary.json", "timeseries.csv", "tracking.png")
-"""What :meth:`SimulationResult.write` puts in a directory."""
+"""What :meth:`SimulationResult.write` puts in a directory (figures as PNG, the default)."""
+
+
+def result_files(figure_format: FigureFormat | str | None = None) -> tuple[str, ...]:
+    """What :meth:`SimulationResult.write` puts in a directory with figures in
+    ``figure_format`` (:class:`flexarm.figures.FigureFormat`; default PNG)."""
+    fmt = FigureFormat.coerce(figure_format)
+    return (*RESULT_FILES[:-1], fmt.filename("tracking"))
+
 
 F64 = NDArray[np.float64]
 _ARRAYS = (
@@ -266,22 +281,26 @@ class SimulationResult:
             raise InvalidValueError(f"{path} is not a flexarm simulation result (format field).")
         return cls(**arrays, coordinate_names=list(meta["coordinate_names"]), info=meta["info"])
 
-    def write(self, directory: str | os.PathLike[str], summary: Mapping[str, JSONValue]) -> Path:
-        """Write :data:`RESULT_FILES` into ``directory`` (new, or empty) all at once:
+    def write(
+        self,
+        directory: str | os.PathLike[str],
+        summary: Mapping[str, JSONValue],
+        *,
+        figure_format: FigureFormat | str | None = None,
+    ) -> Path:
+        """Write :func:`result_files` into ``directory`` (new, or empty) all at once:
         ``result.npz`` (:meth:`save`), ``summary.json`` (``summary``),
-        ``timeseries.csv`` (:meth:`table`) and ``tracking.png`` (:meth:`plot`),
+        ``timeseries.csv`` (:meth:`table`) and ``tracking.png`` (:meth:`plot`; or
+        ``.pdf``, ``.svg`` as ``figure_format`` says, :class:`flexarm.figures.FigureFormat`),
         written beside it and renamed into place, so that an interrupted write
         leaves nothing behind."""
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-
+        fmt = FigureFormat.coerce(figure_format)
         out = Path(directory)
         with output_directory(out) as tmp:
             self.save(tmp / "result.npz")
             (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
             self._write_csv(tmp / "timeseries.csv")
-            fig = self.plot()
-            FigureCanvasAgg(fig)
-            fig.savefig(tmp / "tracking.png", dpi=100)
+            save_figure(self.plot(), tmp / "tracking", fmt)
         return out
 
     # ------------------------------------------------------------------ plots
@@ -294,9 +313,10 @@ class SimulationResult:
 
         return animate(self, fps=fps, speed=speed, fig=fig)
 
+    @styled
     def plot(self, fig: Figure | None = None) -> Figure:
         """Three panels: the XY path against the desired one, the error, the link
-        deflections.
+        deflections (in :mod:`flexarm.figures`' style, across two columns of a paper).
 
         Parameters
         ----------
@@ -308,34 +328,35 @@ class SimulationResult:
         matplotlib.figure.Figure
             Never shown, never blocks.
         """
-        from matplotlib.figure import Figure
-
         if fig is None:
-            fig = Figure(figsize=(10, 6.5), layout="constrained")
-        grid = fig.add_gridspec(2, 2)
+            fig = new_figure(DOUBLE_COLUMN, 3.6)
+        grid = fig.add_gridspec(2, 2, width_ratios=(1.15, 1.0))
         ax_xy = fig.add_subplot(grid[:, 0])
         ax_err = fig.add_subplot(grid[0, 1])
         ax_def = fig.add_subplot(grid[1, 1], sharex=ax_err)
         stride = max(1, self.t.shape[0] // _PLOT_POINTS)  # a path far finer than the page
         desired, tip = self.desired[::stride], self.tip[::stride]
-        ax_xy.plot(desired[:, 0], desired[:, 1], "k--", lw=1, label="desired")
-        ax_xy.plot(tip[:, 0], tip[:, 1], lw=1.2, label="end effector")
-        ax_xy.set(
-            xlabel="x (m)",
-            ylabel="y (m)",
-            aspect="equal",
-            title=f"{self.info.get('controller', '')}, sensor {self.info.get('sensor', '')}",
+        ax_xy.plot(desired[:, 0], desired[:, 1], "k--", lw=0.8, label="desired")
+        ax_xy.plot(tip[:, 0], tip[:, 1], label="end effector")
+        ax_xy.set(xlabel="x (m)", ylabel="y (m)")
+        ax_xy.set_aspect("equal", adjustable="datalim")
+        ax_xy.set_title(
+            f"controller {self.info.get('controller', '')}, sensor {self.info.get('sensor', '')}"
         )
-        ax_xy.legend(loc="best", fontsize="small")
-        ax_err.plot(*envelope(self.t, 1e3 * self.error, _PLOT_POINTS), lw=1)
+        ax_xy.legend(loc="best")
+        ax_err.plot(*envelope(self.t, 1e3 * self.error, _PLOT_POINTS))
         ax_err.set(ylabel="error (mm)")
+        ax_err.tick_params(labelbottom=False)
+        t0, t1 = (float(self.t[0]), float(self.t[-1])) if self.t.size else (0.0, 0.0)
         for tc in self.corner_times:
-            ax_err.axvline(tc, color="0.8", lw=0.8, zorder=0)
+            if t0 <= tc <= t1:  # corners after a short run's end would stretch the axis
+                ax_err.axvline(tc, color="0.8", lw=0.6, zorder=0)
         for i in range(self.n_links):
             deflection = envelope(self.t, 1e3 * self.link_deflections[:, i], _PLOT_POINTS)
-            ax_def.plot(*deflection, lw=1, label=f"link {i + 1}")
+            ax_def.plot(*deflection, label=f"link {i + 1}")
         ax_def.set(xlabel="t (s)", ylabel="tip deflection (mm)")
-        ax_def.legend(loc="best", fontsize="small")
+        if self.n_links:
+            ax_def.legend(loc="best")
         return fig
 
 

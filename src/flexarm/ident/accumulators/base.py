@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, ClassVar, Self
 
 import numpy as np
@@ -23,8 +23,16 @@ from numpy.typing import NDArray
 from ...errors import InvalidValueError
 from ..kernels import KernelFunction
 from . import _loops
+from .blocks import BLOCK, ChunkPartials, segments, zeros_like
 
-__all__ = ["CALLABLE", "Accumulator", "GridAccumulator", "Smoothing", "State"]
+__all__ = [
+    "CALLABLE",
+    "Accumulator",
+    "BlockedAccumulator",
+    "GridAccumulator",
+    "Smoothing",
+    "State",
+]
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -59,7 +67,9 @@ class Smoothing:
     binned : float or None
         Relative bin width ``r`` of binned mode.
     series : bool
-        Gaussian series sums.
+        Gaussian series sums (resolved: ``series="auto"`` is decided before).
+    block : int
+        Samples per block of the blocked sums (:mod:`~flexarm.ident.accumulators.blocks`).
     """
 
     owner: str
@@ -71,6 +81,7 @@ class Smoothing:
     grid: F64 | None = None
     binned: float | None = None
     series: bool = False
+    block: int = BLOCK
 
     @property
     def d(self) -> int:
@@ -113,11 +124,26 @@ class Smoothing:
         return W
 
     def callable_sums(self, Q: F64, X: F64, y: F64, h: F64, scale: F64, num: F64, den: F64) -> None:
-        """Add the callable kernel's ``sum W y`` and ``sum W`` at ``Q`` to ``num``, ``den``."""
+        """Add the callable kernel's ``sum W y`` and ``sum W`` at ``Q`` to ``num``, ``den``.
+
+        One addition per sample, in sample order (the caller cuts the blocks).
+        """
         step = max(1, 2**20 // Q.shape[0])
         for s in range(0, X.shape[0], step):
             W = self.callable_weights(Q, X[s : s + step], h[s : s + step], scale[s : s + step])
             _loops.accumulate_rows(W, y[s : s + step], num, den)
+
+    def blocked_callable_sums(self, Q: F64, X: F64, y: F64, h: F64, scale: F64) -> tuple[F64, F64]:
+        """``N`` and ``D`` at ``Q`` over samples ``1 .. n`` in the blocked order (callable)."""
+        num, den = np.zeros(Q.shape[0]), np.zeros(Q.shape[0])
+        for a, b, closes in segments(0, X.shape[0], self.block):
+            pn, pd = np.zeros(Q.shape[0]), np.zeros(Q.shape[0])
+            self.callable_sums(Q, X[a:b], y[a:b], h[a:b], scale[a:b], pn, pd)
+            if not closes:  # the open block: added last, as the grid modes do
+                return num + pn, den + pd
+            num += pn
+            den += pd
+        return num + 0.0, den + 0.0
 
 
 class Accumulator(ABC):
@@ -153,6 +179,43 @@ class Accumulator(ABC):
         self._add(X, y)
         self.n_samples += X.shape[0]
 
+    @classmethod
+    def chunk_partials(cls, setup: Smoothing, X: F64, y: F64, start: int) -> ChunkPartials:
+        """The partials of samples ``start + 1 .. start + m`` (a pure function, picklable).
+
+        Exact and binned modes take their samples in order: their "partials"
+        are the samples themselves. Blocked modes override this.
+
+        Parameters
+        ----------
+        setup : Smoothing
+            The estimate.
+        X : ndarray, shape (m, d)
+            Checked inputs (units of the regressor), C-contiguous float64.
+        y : ndarray, shape (m,)
+            Checked outputs (units of the response).
+        start : int
+            Global 0-based index of the chunk's first sample.
+        """
+        return ChunkPartials(start, X.shape[0], ({"X": X, "y": y},))
+
+    def add_partials(self, partials: ChunkPartials) -> None:
+        """Combine a chunk's partials (from :meth:`chunk_partials`), in sample order.
+
+        ``partials.start`` must equal :attr:`n_samples`.
+        """
+        self._check_start(partials)
+        for blk in partials.blocks:
+            self.add_chunk(blk["X"], blk["y"])
+
+    def _check_start(self, partials: ChunkPartials) -> None:
+        if partials.start != self.n_samples:
+            raise self.setup.fail(
+                "partials",
+                f"the next chunk in order (starting at sample {self.n_samples})",
+                f"a chunk starting at sample {partials.start}",
+            )
+
     @abstractmethod
     def evaluate(self, Q: F64) -> F64:
         """The estimate ``m_n`` at the rows of ``Q`` (shape ``(m, d)``); NaN where no weight.
@@ -177,6 +240,8 @@ class Accumulator(ABC):
     @classmethod
     def from_state(cls, setup: Smoothing, state: Mapping[str, NDArray[Any]]) -> Self:
         """An accumulator resuming exactly from ``state`` (written by :meth:`state`)."""
+        if "block" in state:  # the block size the sums were written with
+            setup = replace(setup, block=int(state["block"]))
         acc = cls(setup)
         acc._restore(state)
         acc.n_samples = int(state["n_samples"])
@@ -198,8 +263,6 @@ class GridAccumulator(Accumulator):
         order = np.argsort(grid[:, 0], kind="stable") if setup.d == 1 else np.arange(len(grid))
         self.inv: I64 = np.argsort(order).astype(np.int64)
         self.sorted_grid: F64 = np.ascontiguousarray(grid[order])
-        self.num = np.zeros(grid.shape[0])
-        self.den = np.zeros(grid.shape[0])
 
     @abstractmethod
     def sums(self) -> tuple[F64, F64]:
@@ -234,3 +297,96 @@ class GridAccumulator(Accumulator):
         """``N`` and ``D`` at the grid points in the order given, shape (g,) each."""
         num, den = self.sums()
         return num[self.inv], den[self.inv]
+
+
+class BlockedAccumulator(GridAccumulator):
+    """Grid accumulators whose sums run in the blocked order (grid and series modes).
+
+    The state is two sets of arrays of the same shapes: ``total`` (the
+    complete blocks, added in block order) and ``open`` (the partial of the
+    open block, from 0 in sample order); see
+    :mod:`~flexarm.ident.accumulators.blocks`. State keys: each array under its
+    name (total) and under ``"open_" + name``; ``block`` (the block size).
+    """
+
+    def __init__(self, setup: Smoothing) -> None:
+        super().__init__(setup)
+        self.total: dict[str, F64] = self._new_arrays()
+        self.open: dict[str, F64] = zeros_like(self.total)
+
+    @abstractmethod
+    def _new_arrays(self) -> dict[str, F64]:
+        """Fresh zero sums by state key."""
+
+    @abstractmethod
+    def _add_block(self, X: F64, y: F64, start: int, sums: dict[str, F64]) -> None:
+        """Add samples ``start + 1 ..`` (all in one block) to ``sums``, in sample order."""
+
+    def _add(self, X: F64, y: F64) -> None:
+        for a, b, closes in segments(self.n_samples, X.shape[0], self.setup.block):
+            self._add_block(X[a:b], y[a:b], self.n_samples + a, self.open)
+            if closes:
+                self._close()
+
+    def _close(self) -> None:
+        """The open block is complete: add it to the total, start a new one."""
+        for k, v in self.open.items():
+            self.total[k] += v
+            v[...] = 0.0
+
+    def current(self) -> dict[str, F64]:
+        """``total + open`` by key: the sums over every sample seen."""
+        return {k: v + self.open[k] for k, v in self.total.items()}
+
+    @classmethod
+    def chunk_partials(cls, setup: Smoothing, X: F64, y: F64, start: int) -> ChunkPartials:
+        acc = cls(setup)
+        blocks = []
+        for a, b, _ in segments(start, X.shape[0], setup.block):
+            part = zeros_like(acc.open)
+            acc._add_block(X[a:b], y[a:b], start + a, part)
+            blocks.append(part)
+        return ChunkPartials(start, X.shape[0], tuple(blocks))
+
+    def add_partials(self, partials: ChunkPartials) -> None:
+        """Combine a chunk's per-block partials in order (or add its samples, if it sent them).
+
+        Partial sums need the open block empty (``n_samples`` a multiple of the
+        block size) and ``partials.start == n_samples``.
+        """
+        if partials.blocks and "X" in partials.blocks[0]:
+            super().add_partials(partials)
+            return
+        self._check_start(partials)
+        if self.n_samples % self.setup.block:
+            raise self.setup.fail(
+                "partials",
+                f"added when the open block is empty (after a multiple of {self.setup.block} "
+                "samples)",
+                f"{self.n_samples % self.setup.block} sample(s) in the open block",
+            )
+        pieces = list(segments(partials.start, partials.n, self.setup.block))
+        if len(pieces) != len(partials.blocks):
+            raise self.setup.fail(
+                "partials", f"{len(pieces)} block(s) for the chunk", f"{len(partials.blocks)}"
+            )
+        for (_, _, closes), blk in zip(pieces, partials.blocks, strict=True):
+            for k, v in self.open.items():
+                v[...] = blk[k]
+            if closes:
+                self._close()
+        self.n_samples += partials.n
+
+    def _arrays(self) -> State:
+        out: State = {"block": np.array(self.setup.block, dtype=np.int64)}
+        out.update(self.total)
+        out.update({"open_" + k: v for k, v in self.open.items()})
+        return out
+
+    def _restore(self, state: Mapping[str, NDArray[Any]]) -> None:
+        """Files without ``open_*`` keys (format 1) resume with their sums as the total."""
+        for k, v in self.total.items():
+            if k in state:
+                v[...] = state[k]
+            if "open_" + k in state:
+                self.open[k][...] = state["open_" + k]

@@ -31,6 +31,12 @@ class BinnedSums(GridAccumulator):
     read). Blocks whose bins would outnumber their samples are added exactly,
     sample by sample. Chunked :meth:`add_chunk` equals one call bit for bit.
 
+    Binned mode keeps its own blocks (of nearly equal ``h_i``, not the fixed
+    blocks of :mod:`~flexarm.ident.accumulators.blocks`): its chunks are taken
+    in order, one after another (:meth:`add_partials` receives the samples),
+    so a Dask array or an iterator of chunks is fitted sequentially in bounded
+    memory, bit for bit as one call.
+
     State arrays: ``num``, ``den`` (g,) — closed blocks; ``bin_block`` (3,) int
     — start, end and kind (0 none, 1 binned, 2 exact) of the open block;
     ``bin_float`` (3,) — its ``h_B``, bin origin and bin width; ``bin_cw``,
@@ -47,6 +53,8 @@ class BinnedSums(GridAccumulator):
         self.r = setup.binned
         self.kernel = KERNELS[setup.code]
         g = self.sorted_grid.shape[0]
+        self.num = np.zeros(g)
+        self.den = np.zeros(g)
         self.block = np.array([1, 1, 0], dtype=np.int64)
         self.floats = np.zeros(3)
         self.cw = np.zeros(0)
@@ -72,7 +80,7 @@ class BinnedSums(GridAccumulator):
                 gs = self.sorted_grid[:, 0]
                 c = binning.radius(self.kernel)
                 _loops.grid_update_1d(setup.code, gs, xs, ys, h[:, 0], scale, self.num, self.den, c)
-                self.totals += (scale.sum(), (scale * np.abs(ys)).sum())
+                _loops.add_totals(scale, ys, self.totals)  # one by one: chunks equal one call
             else:
                 binning.bin_samples(
                     xs,

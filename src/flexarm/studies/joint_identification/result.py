@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._io import JSONValue, atomic_path
+from ...figures import DOUBLE_COLUMN, FigureFormat, new_figure, save_figure, styled
 from .parameters import DriveNonlinearity
 
 if TYPE_CHECKING:
@@ -23,12 +24,17 @@ if TYPE_CHECKING:
 
     from ...ident.hammerstein import HammersteinIdentifier
 
-__all__ = ["SAVED_FILES", "CurveEstimate", "JointIdentification"]
+__all__ = ["SAVED_FILES", "CurveEstimate", "JointIdentification", "saved_files"]
 
 F64 = NDArray[np.float64]
 SAVED_FILES = ("summary.json", "curves.npz", "identify_joint.png")
-"""What :meth:`JointIdentification.save` writes."""
-_FIGURE_SIZE = (11.0, 7.5)  # inches
+"""What :meth:`JointIdentification.save` writes (the figure as PNG, the default)."""
+_FIGURE_SIZE = (DOUBLE_COLUMN, 5.0)  # inches: two columns of a paper
+
+
+def saved_files(figure_format: FigureFormat | str | None = None) -> tuple[str, ...]:
+    """What :meth:`JointIdentification.save` writes with its figure in ``figure_format``."""
+    return (*SAVED_FILES[:-1], FigureFormat.coerce(figure_format).filename("identify_joint"))
 
 
 @dataclass(frozen=True)
@@ -147,23 +153,32 @@ class JointIdentification:
             "info": dict(self.info),
         }
 
-    def save(self, directory: str | os.PathLike[str]) -> list[Path]:
+    def save(
+        self,
+        directory: str | os.PathLike[str],
+        *,
+        figure_format: FigureFormat | str | None = None,
+    ) -> list[Path]:
         """Write ``summary.json``, ``curves.npz`` and ``identify_joint.png`` into ``directory``.
 
         Each file is written atomically; the directory is created if needed.
         The figure is drawn off screen (no pyplot, no change of backend).
 
+        Parameters
+        ----------
+        directory : str or path-like
+        figure_format : FigureFormat or str, optional
+            The figure's format and resolution (default PNG,
+            :class:`flexarm.figures.FigureFormat`): ``identify_joint.pdf`` with ``"pdf"``.
+
         Returns
         -------
         list of Path
-            The files written (:data:`SAVED_FILES`).
+            The files written (:func:`saved_files`).
         """
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-
         out = Path(directory)
         out.mkdir(parents=True, exist_ok=True)
-        paths = [out / name for name in SAVED_FILES]
+        paths = [out / name for name in SAVED_FILES[:-1]]
         with atomic_path(paths[0]) as tmp:
             tmp.write_text(json.dumps(self.summary(), indent=2) + "\n")
         arrays: dict[str, F64] = {}
@@ -174,20 +189,18 @@ class JointIdentification:
         arrays["impulse_response"] = self.hammerstein.impulse_response_
         with atomic_path(paths[1]) as tmp, open(tmp, "wb") as f:
             np.savez(f, **arrays)  # type: ignore[arg-type]
-        fig = Figure(figsize=_FIGURE_SIZE, layout="constrained")
-        FigureCanvasAgg(fig)
-        self.plot(fig)
-        with atomic_path(paths[2]) as tmp:
-            fig.savefig(tmp, format="png", dpi=110)
+        paths.append(save_figure(self.plot(), out / "identify_joint", figure_format))
         return paths
 
+    @styled
     def plot(self, fig: Figure | None = None) -> Figure:
         """Four panels: stiffness (with the windup region enlarged), friction, drive, validation.
 
         Parameters
         ----------
         fig : matplotlib Figure, optional
-            Where to draw (an empty figure); default a new pyplot figure.
+            Where to draw (an empty figure); default a new figure two columns of a
+            paper wide (not registered with pyplot).
 
         Returns
         -------
@@ -195,55 +208,53 @@ class JointIdentification:
             Never blocks.
         """
         if fig is None:
-            import matplotlib.pyplot as plt
-
-            fig = plt.figure(figsize=_FIGURE_SIZE, layout="constrained")
+            fig = new_figure(*_FIGURE_SIZE)
         axes = fig.subplots(2, 2)
         s = self.stiffness
         ax = axes[0, 0]
-        ax.plot(1e3 * s.x, s.truth, "k--", lw=1, label="true")
+        ax.plot(1e3 * s.x, s.truth, "k--", lw=0.8, zorder=3, label="true")
         ax.plot(1e3 * s.x, s.estimate, lw=1.2, label="estimate")
         ax.set(
             xlabel="deflection Δ (mrad)",
             ylabel="stiffness torque τ_s (N m)",
             title="joint stiffness torque",
         )
-        ax.legend(loc="upper left", fontsize="small")
+        ax.legend(loc="upper left")
         w = self.info.get("windup_width_rad")
         if isinstance(w, int | float) and w:  # the soft-windup width, rad (0: none)
             inset = ax.inset_axes((0.58, 0.08, 0.38, 0.38))
             sel = np.abs(s.x) <= 3 * w
-            inset.plot(1e3 * s.x[sel], s.truth[sel], "k--", lw=1)
+            inset.plot(1e3 * s.x[sel], s.truth[sel], "k--", lw=0.8, zorder=3)
             inset.plot(1e3 * s.x[sel], s.estimate[sel], lw=1.2)
-            inset.set_title("soft windup", fontsize="small")
-            inset.tick_params(labelsize="x-small")
+            inset.set_title("soft windup", fontsize=7, pad=2)
+            inset.tick_params(labelsize=6, pad=1)
         f = self.friction
         ax = axes[0, 1]
-        ax.plot(f.x, f.truth, "k--", lw=1, label="true")
+        ax.plot(f.x, f.truth, "k--", lw=0.8, zorder=3, label="true")
         ax.plot(f.x, f.estimate, lw=1.2, label="estimate")
         ax.set(xlabel="link rate v (rad/s)", ylabel="friction f(v) (N m)", title="joint friction")
-        ax.legend(loc="best", fontsize="small")
+        ax.legend(loc="best")
         d = self.drive
         ax = axes[1, 0]
-        ax.plot(d.x, d.truth, "k--", lw=1, label="true drive map")
+        ax.plot(d.x, d.truth, "k--", lw=0.8, zorder=3, label="true drive map")
         ax.plot(d.x, d.estimate, lw=1.2, label="Hammerstein φ̂")
         ax.set(xlabel="command u (N m)", ylabel="applied torque (N m)", title="drive nonlinearity")
-        ax.legend(loc="upper left", fontsize="small")
+        ax.legend(loc="upper left")
         span = self.dead_band.get("span_Nm")
         drive = self.info.get("drive")
         if span and isinstance(drive, dict):  # the dead band, enlarged
             truth = DriveNonlinearity(float(drive["dead_band_Nm"]), float(drive["limit_Nm"]))  # type: ignore[arg-type]
             xs = np.linspace(-span, span, 241)
             inset = ax.inset_axes((0.58, 0.08, 0.38, 0.38))
-            inset.plot(xs, truth(xs), "k--", lw=1)
+            inset.plot(xs, truth(xs), "k--", lw=0.8, zorder=3)
             inset.plot(xs, self.hammerstein.nonlinearity(xs), lw=1.2)
-            inset.set_title("dead band", fontsize="small")
-            inset.tick_params(labelsize="x-small")
+            inset.set_title("dead band", fontsize=7, pad=2)
+            inset.tick_params(labelsize=6, pad=1)
         v = self.validation
         ax = axes[1, 1]
         m = min(200, v["t"].shape[0])
         ax.plot(v["t"][:m], v["y"][:m], "k", lw=0.8, label="measured")
         ax.plot(v["t"][:m], v["y_hat"][:m], lw=1.0, label=f"model ({self.fit_percent:.1f} %)")
         ax.set(xlabel="t (s)", ylabel="link acceleration (rad/s²)", title="held-out data")
-        ax.legend(loc="best", fontsize="small")
+        ax.legend(loc="best")
         return fig

@@ -46,6 +46,7 @@ from ...sensing.delays import DelayModel
 from ...sensing.sensors import PointSensor, TipSensor
 from ...sim.batch import Outcome, simulate_many
 from ...sim.results import SimulationError
+from .units import mm, sig
 
 __all__ = [
     "CONSTANT_GAINS",
@@ -216,7 +217,7 @@ class Beyond:
                 lines.append("  " + _row_text(f"LQG ({name}), {sensor}", r))
             fz, cg, helps = self.adaptation(sensor)
             lines.append(
-                f"  fuzzy adaptive LQG, {sensor}: best RMS {fz:.4g} m against {cg:.4g} m for the "
+                f"  fuzzy adaptive LQG, {sensor}: best RMS {mm(fz)} against {mm(cg)} for the "
                 f"best constant gain: the adaptation {'helps' if helps else 'does not help'}"
             )
         for r in self.of("reflected", "tip"):
@@ -234,55 +235,76 @@ class Beyond:
         return lines
 
     def html(self) -> str:
-        """The report's section on the study."""
+        """The report's section on the study (errors in mm to three significant figures;
+        the table in its own scroll box)."""
         import html as _html
 
-        columns = ("law", "sensor", "row", "status", "rms_error_m", "max_error_m", "max_torque_Nm")
-        names = (
+        from .cases import SENSOR_LABELS
+        from .html import table
+        from .units import MISSING
+
+        def label(sensor: object) -> str:
+            return SENSOR_LABELS.get(str(sensor), str(sensor))
+
+        def num(value: object, scale: float = 1.0) -> str:
+            return sig(scale * float(value)) if isinstance(value, int | float) else MISSING
+
+        def outcome(r: RowResult) -> str:
+            at = r["diverged_at_s"]
+            return "completed" if r["status"] == "ok" else f"diverged at t = {num(at)} s"
+
+        headers = (
             "law",
             "sensor",
-            "row",
-            "status",
-            "RMS error (m)",
-            "max error (m)",
+            "plant or disturbance",
+            "outcome",
+            "RMS error (mm)",
+            "max error (mm)",
             "max torque (N m)",
         )
-        head = "".join(f"<th>{h}</th>" for h in names)
-        body = "".join(
-            "<tr>"
-            + "".join(f"<td>{_html.escape(_num(dict(r)[k]))}</td>" for k in columns)
-            + "</tr>"
+        rows = [
+            [
+                r["law"],
+                label(r["sensor"]),
+                r["row"],
+                outcome(r),
+                num(r["rms_error_m"], 1e3),
+                num(r["max_error_m"], 1e3),
+                num(r["max_torque_Nm"]),
+            ]
             for r in self.rows
-        )
+        ]
+        runs = table(headers, rows, [False] * 4 + [True] * 3)
         targets = "".join(
-            f"<li>{_html.escape(str(x['sensor']))}: {_html.escape(str(x['target']))}: "
-            f"{_html.escape(_num(x['value']))} — <b>{'met' if x['met'] else 'NOT met'}</b></li>"
+            f"<li>{_html.escape(label(x['sensor']))}: {_html.escape(str(x['target']))}: "
+            f"{_html.escape(num(x['value']))} — <b>{'met' if x['met'] else 'NOT met'}</b></li>"
             for x in self.targets
         )
         adapt = []
         for sensor in self.chosen:
             fuzzy, constant, helps = self.adaptation(sensor)
             adapt.append(
-                f"<li>{sensor}: fuzzy adaptive LQG best RMS {fuzzy:.4g} m, best constant gain "
-                f"{constant:.4g} m: the adaptation {'helps' if helps else 'does not help'}.</li>"
+                f"<li>{_html.escape(label(sensor))}: fuzzy adaptive LQG best RMS "
+                f"{num(fuzzy, 1e3)} mm, best constant gain {num(constant, 1e3)} mm: the "
+                f"adaptation {'helps' if helps else 'does not help'}.</li>"
             )
+        chosen = "; ".join(f"{label(s)}: {name}" for s, name in self.chosen.items())
         doc = (__doc__ or "").split("\n\n")[1:4]
         return (
             "<h2>Beyond the paper: tracking with a physical distant sensor</h2>"
             + "".join(f"<p>{_html.escape(' '.join(d.split()))}</p>" for d in doc)
-            + f"<p>Chosen LQG weights by the minimax rule: {_html.escape(str(self.chosen))}; "
-            f"reflected-tip limit alpha* = {self.alpha_limit:.3g} (run at 0.9 alpha*).</p>"
+            + f"<p>LQG weights chosen by the minimax rule: {_html.escape(chosen)}; "
+            f"reflected-tip limit alpha* = {sig(self.alpha_limit)} (run at 0.9 alpha*).</p>"
             + f"<h3>Targets</h3><ul>{targets}</ul><h3>Adaptation</h3><ul>{''.join(adapt)}</ul>"
             + "<h3>Linear growth rates (1/s) over the square's elbow angles</h3><ul>"
             + "".join(
-                f"<li>{_html.escape(s)}: "
+                f"<li>{_html.escape(label(s))}: "
                 + ", ".join(f"{_html.escape(row)} {rate:+.3g}" for row, rate in g.items())
                 + "</li>"
                 for s, g in self.growth.items()
             )
             + "</ul>"
-            + f"<h3>Every run</h3><div style='overflow-x:auto'><table><tr>{head}</tr>{body}"
-            "</table></div>"
+            + f"<h3>Every run</h3>{runs}"
         )
 
 
@@ -450,6 +472,6 @@ def _row_text(name: str, r: RowResult) -> str:
     if r["status"] != "ok":
         return f"{name}, {r['row']}: diverged at {r['diverged_at_s']:.3g} s"
     return (
-        f"{name}, {r['row']}: RMS {_num(r['rms_error_m'])} m, max {_num(r['max_error_m'])} m, "
-        f"torque {_num(r['max_torque_Nm'])} N m"
+        f"{name}, {r['row']}: RMS {mm(r['rms_error_m'])}, max {mm(r['max_error_m'])}, "
+        f"torque {sig(r['max_torque_Nm'])} N m"
     )

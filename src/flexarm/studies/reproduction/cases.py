@@ -19,8 +19,8 @@ if TYPE_CHECKING:
 
 __all__ = [
     "ADAPTATION_LAWS",
+    "CONTROLLER_DESCRIPTIONS",
     "CONTROLLER_KINDS",
-    "CONTROLLER_LABELS",
     "CONVERGED_ARM_TABLE",
     "DEFAULT_DT",
     "DEFAULT_KS",
@@ -40,7 +40,9 @@ __all__ = [
 ]
 
 CONTROLLER_KINDS = ("pd", "fuzzy")
-"""Nonadaptive (the paper's JT-PD gains) and fuzzy adaptive."""
+"""Nonadaptive (the paper's JT-PD gains) and fuzzy adaptive: each law's one name, the
+same in the JSON summary, on the console, in the figures and in the report (and on
+the command line: ``flexarm simulate --controller pd``)."""
 SENSOR_CASES = ("joint", "tip", "point:1:0.5")
 """Joint encoders, the end effector, and 0.5 m from the elbow along link 2."""
 DELAY_CASES = ("none", "seed", "dispersive")
@@ -85,7 +87,11 @@ clamped-mass modes each and geometric stiffening (within 0.02 mm of a
 geometrically exact reference's 63 mm peak on the square;
 :mod:`flexarm.model.validity`)."""
 
-CONTROLLER_LABELS = {"pd": "nonadaptive PD", "fuzzy": "fuzzy adaptive"}
+CONTROLLER_DESCRIPTIONS = {
+    "pd": "the paper's nonadaptive Jacobian-transpose PD law",
+    "fuzzy": "the paper's fuzzy adaptive law (the same PD, its gains scaled by the fuzzy system)",
+}
+"""What each name of :data:`CONTROLLER_KINDS` stands for, once per report."""
 MODEL_LABELS = {"paper": "the paper's sensor model", "physical": "the physical sensor model"}
 SENSOR_LABELS = {"joint": "joint", "tip": "end effector", "point:1:0.5": "0.5 m from elbow"}
 
@@ -173,7 +179,7 @@ class Case:
     @property
     def label(self) -> str:
         """A readable name: controller, sensor, and the settings that differ from the matrix."""
-        text = f"{CONTROLLER_LABELS[self.controller]}, {SENSOR_LABELS[self.sensor]} sensor"
+        text = f"{self.controller}, {SENSOR_LABELS[self.sensor]} sensor"
         if self.sensor != "joint":
             text += f" ({self.sensor_model} model)"
         if self.controller == "fuzzy":

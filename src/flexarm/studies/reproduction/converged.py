@@ -122,24 +122,33 @@ class Converged:
         return lines
 
     def html(self) -> str:
-        """A section of the HTML report."""
-        parts = [
-            "<h2>On a converged arm</h2>",
-            "<p>The paper's matrix rerun on the paper's links with three clamped-mass modes "
-            f"per link and geometric stiffening (control period {self.dt_s:g} s), judged by "
-            "the same rule.</p>",
-            "<div style='overflow-x:auto'><table><tr><th>claim</th><th>sensor model</th>"
-            "<th>verdict</th><th>evidence</th></tr>",
+        """The report's section: the runs and the verdicts on the converged arm (tables
+        in their own scroll boxes)."""
+        from .html import case_table, table
+
+        rows = [
+            [
+                c["claim"],
+                MODEL_LABELS.get(c["sensor_model"], c["sensor_model"]),
+                c["verdict"],
+                c["evidence"],
+            ]
+            for c in self.claims
         ]
-        for c in self.claims:
-            parts.append(
-                "<tr><td style='text-align:left'>"
-                f"{html.escape(c['claim'])}</td><td>"
-                f"{html.escape(MODEL_LABELS.get(c['sensor_model'], c['sensor_model']))}</td>"
-                f"<td>{html.escape(c['verdict'])}</td><td style='text-align:left'>"
-                f"{html.escape(c['evidence'])}</td></tr>"
-            )
-        parts.append("</table></div>")
         changed = "; ".join(self.changes) if self.changes else "none"
-        parts.append(f"<p>Verdicts that change: {html.escape(changed)}.</p>")
-        return "\n".join(parts)
+        return "\n".join(
+            [
+                "<h2>On a converged arm</h2>",
+                "<p>The paper's matrix rerun on the paper's links with three clamped-mass "
+                f"modes per link and geometric stiffening (control period {self.dt_s:g} s), "
+                "judged by the same rule.</p>",
+                case_table(self.cases),
+                table(
+                    ("claim", "sensor model", "verdict", "evidence"),
+                    rows,
+                    numeric=(False, False, False, False),
+                    wrap=(True, False, False, True),
+                ),
+                f"<p>Verdicts that change: {html.escape(changed)}.</p>",
+            ]
+        )

@@ -31,7 +31,8 @@ The claims, with their parts:
 4. (With a ``ks`` study) *Some setting of the fuzzy law tracks well with every
    sensor*: one setting (``ks``, adaptation law) tracks well with every sensor.
 
-Every verdict carries its evidence: the numbers of the runs behind it.
+Every verdict carries its evidence: the numbers of the runs behind it (errors in
+mm to three significant figures, :mod:`~flexarm.studies.reproduction.units`).
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ from collections.abc import Sequence
 from typing import NamedTuple, TypedDict
 
 from .cases import MODEL_LABELS, SENSOR_CASES, SENSOR_LABELS, CaseResult
+from .units import mm, sig
 
 __all__ = ["VERDICTS", "Claim", "Part", "claims", "describe", "judge", "tracks_well"]
 
@@ -81,8 +83,8 @@ def describe(result: CaseResult) -> str:
     pole = f"linearised poles up to Re {result.max_real_pole:+.3g} rad/s"
     sensor = SENSOR_LABELS[result.case.sensor]
     if result.status != "ok":
-        return f"{sensor}: diverged at t = {result.diverged_at_s:.3g} s ({pole})"
-    return f"{sensor}: RMS {result.rms:.3g} m ({pole})"
+        return f"{sensor}: diverged at t = {sig(result.diverged_at_s)} s ({pole})"
+    return f"{sensor}: RMS {mm(result.rms)} ({pole})"
 
 
 def _all(name: str, runs: Sequence[CaseResult], test: bool) -> Part:
@@ -132,7 +134,7 @@ def claims(
 def _claims_of_model(
     model: str, cases: Sequence[CaseResult], ks_study: Sequence[CaseResult], tol: float
 ) -> list[Claim]:
-    tail = f" (tracks well: completes with RMS <= {tol:.3g} m; {MODEL_LABELS[model]})."
+    tail = f" (tracks well: completes with RMS <= {mm(tol)}; {MODEL_LABELS[model]})."
     pd = [c for c in cases if c.case.controller == "pd"]
     fz = [c for c in cases if c.case.controller == "fuzzy"]
     collocated = [c for c in pd if c.case.sensor == "joint"]
@@ -167,8 +169,9 @@ def _claims_of_model(
                     evidence="sensors where the adaptive RMS error is lower: "
                     + (", ".join(SENSOR_LABELS[a.case.sensor] for a in better) or "none")
                     + " (adaptive vs nonadaptive: "
-                    + "; ".join(
-                        f"{SENSOR_LABELS[a.case.sensor]}: {a.rms:.4g} vs {b.rms:.4g} m"
+                    + "; ".join(  # four figures: the pairs may differ in the third
+                        f"{SENSOR_LABELS[a.case.sensor]}: {sig(1e3 * a.rms, 4)} vs "
+                        f"{sig(1e3 * b.rms, 4)} mm"
                         for a, b in pairs
                     )
                     + ", inf = diverged)",
@@ -198,7 +201,7 @@ def _claims_of_model(
             best.append(
                 f"{SENSOR_LABELS[sensor]}: "
                 + (
-                    f"RMS {b.rms:.3g} m at ks = {b.case.ks:g} ({b.case.law})"
+                    f"RMS {mm(b.rms)} at ks = {b.case.ks:g} ({b.case.law})"
                     if b.status == "ok"
                     else "every setting diverged"
                 )

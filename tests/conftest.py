@@ -1,0 +1,74 @@
+"""Checks shared by the tests of figures (``test_figures.py``, ``test_report.py``)."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+UNIT = re.compile(r"^\S.* \([^()]+\)$")  # "quantity (unit)"; "(-)" when dimensionless
+SMALLEST_FONT = 6.0  # points: the least a printed figure may carry
+
+
+def _axes_to_label(ax):
+    """The axis names ("x", "y", "z") ``ax`` must label: a colour bar labels its long
+    axis only."""
+    bar = getattr(ax, "_colorbar", None)
+    if bar is not None:
+        return ["y" if bar.orientation == "vertical" else "x"]
+    return ["x", "y", "z"] if ax.name == "3d" else ["x", "y"]
+
+
+def _label(ax, name):
+    """The label of axis ``name`` of ``ax``, or of a sibling sharing it (a shared axis
+    is labelled once, under the bottom panel)."""
+    text = getattr(ax, f"get_{name}label")()
+    if text or name == "z":
+        return text
+    for other in getattr(ax, f"get_shared_{name}_axes")().get_siblings(ax):
+        if getattr(other, f"get_{name}label")():
+            return getattr(other, f"get_{name}label")()
+    return text
+
+
+def _assert_readable(fig, width=None):
+    """Every axis of every axes labelled "quantity (unit)" (insets excepted: they
+    enlarge their parent's axes); no visible text below 6 pt; the figure as wide as a
+    paper's column or two (``width``, inches) when flexarm made it."""
+    from matplotlib.text import Text
+
+    assert fig.axes, "an empty figure"
+    for ax in fig.axes:
+        for name in _axes_to_label(ax):
+            text = _label(ax, name)
+            assert UNIT.match(text), f"{name}-axis of {ax.get_title()!r}: {text!r}"
+    small = [
+        (t.get_text(), t.get_fontsize())
+        for t in fig.findobj(Text)
+        if t.get_visible() and t.get_text() and t.get_fontsize() < SMALLEST_FONT
+    ]
+    assert not small, small
+    if width is not None:
+        assert fig.get_size_inches()[0] == pytest.approx(width)
+
+
+def _root(artist):
+    """The figure an axes is drawn in (through subfigures)."""
+    from matplotlib.figure import Figure
+
+    fig = artist.figure
+    while not isinstance(fig, Figure):
+        fig = fig.figure
+    return fig
+
+
+@pytest.fixture
+def assert_readable():
+    """``assert_readable(fig, width=None)``: what a reader of a printed figure needs."""
+    return _assert_readable
+
+
+@pytest.fixture
+def root():
+    """``root(ax)``: the figure an axes is drawn in."""
+    return _root
