@@ -99,9 +99,7 @@ def origin(modname: str, name: str) -> str:
         if importlib.util.find_spec(source) is None:  # pragma: no cover - broken import
             return source
         mod = importlib.import_module(source)
-        if isinstance(getattr(mod, name, None), types.ModuleType) and name not in _bindings(
-            source
-        ):
+        if isinstance(getattr(mod, name, None), types.ModuleType) and name not in _bindings(source):
             return f"{source}.{name}"  # `from . import x`: the module itself
         modname = source
     return modname
@@ -354,8 +352,41 @@ def _plain_module_docstrings(app: Any) -> None:
             listeners[i] = listener._replace(handler=skip_modules)
 
 
+def _numpydoc_one_template() -> None:
+    """numpydoc compiles its Jinja template anew for every docstring (a third of the
+    build); compile it once. numpydoc's own hook for this is its module-level
+    ``get_doc_object`` (``numpydoc.setup(app, get_doc_object_=...)``)."""
+    import os
+
+    from jinja2 import FileSystemLoader
+    from jinja2.sandbox import SandboxedEnvironment
+    from numpydoc import docscrape, docscrape_sphinx
+    from numpydoc import numpydoc as extension
+
+    folder = os.path.join(os.path.dirname(docscrape_sphinx.__file__), "templates")
+    env = SandboxedEnvironment(loader=FileSystemLoader([folder]))
+    template = env.get_template("numpydoc_docstring.rst")
+
+    def get_doc_object(
+        obj: Any, what: Any = None, doc: Any = None, config: Any = None, builder: Any = None
+    ) -> Any:
+        config = {**(config or {}), "template": template}
+        return docscrape.get_doc_object(
+            obj,
+            what=what,
+            doc=doc,
+            config=config,
+            class_doc=docscrape_sphinx.SphinxClassDoc,
+            func_doc=docscrape_sphinx.SphinxFunctionDoc,
+            obj_doc=docscrape_sphinx.SphinxObjDoc,
+        )
+
+    extension.get_doc_object = get_doc_object  # type: ignore[assignment]
+
+
 def setup(app: Any) -> dict[str, Any]:
     app.setup_extension("numpydoc")
+    _numpydoc_one_template()
     _plain_module_docstrings(app)
     app.connect("autodoc-process-signature", _no_data_signature, priority=100)
     app.connect("autodoc-skip-member", _skip_member)

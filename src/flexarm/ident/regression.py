@@ -49,7 +49,7 @@ mode (:mod:`flexarm.ident.chunked`).
 
 :meth:`~SemiRecursiveKernelRegression.save` writes the hyperparameters and the
 accumulator's :meth:`~flexarm.ident.accumulators.Accumulator.state` — one
-description, plain arrays (:mod:`flexarm.ident._persist`) — to one ``.npz`` file;
+description, plain arrays (``flexarm.ident._persist``) — to one ``.npz`` file;
 :meth:`~SemiRecursiveKernelRegression.load` rebuilds the estimator and its
 accumulator from it (:meth:`~flexarm.ident.accumulators.Accumulator.from_state`),
 and continuing with ``partial_fit`` gives bit for bit what never stopping
