@@ -31,12 +31,17 @@ extensions = [
     "numpydoc",
     "sphinx_gallery.gen_gallery",
     "sphinxarg.ext",
+    "myst_parser",
     "flexarm_api",
 ]
+# the user guide is Markdown (MyST): the README's long sections moved there as written
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+myst_heading_anchors = 3
 
 exclude_patterns = ["_build", "gallery/README.rst", "Thumbs.db", ".DS_Store"]
 templates_path = ["_templates"]
 root_doc = "index"
+smartquotes_action = "qe"  # no dashes: "--help" stays two hyphens
 
 # --- API reference --------------------------------------------------------------------
 autosummary_generate = True

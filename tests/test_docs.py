@@ -29,8 +29,9 @@ def built(tmp_path_factory: pytest.TempPathFactory) -> tuple[int, str, Path]:
     from sphinx.cmd.build import build_main
 
     work = tmp_path_factory.mktemp("docs")
-    source = work / "source"
+    source = work / "docs"
     shutil.copytree(DOCS, source, ignore=shutil.ignore_patterns(*GENERATED))
+    shutil.copytree(ROOT / "examples", work / "examples")  # the guide includes its files
     html, log = work / "html", work / "warnings.log"
     args = ["-W", "--keep-going", "-q", "-w", str(log), "-b", "html"]
     status = build_main([*args, "-d", str(work / "doctrees"), str(source), str(html)])
