@@ -30,6 +30,9 @@ shaper = zv(w[0])
 print(f"locked-joint frequencies at the end: {np.round(w, 2)} rad/s")
 print(f"ZV shaper: amplitudes {shaper.amplitudes}, times {np.round(shaper.times, 3)} s")
 
+# %%
+# The same move, as planned and shaped; the tip deflections of both links.
+
 runs = {
     "as planned": fa.simulate(arm, controller, move, sensor=JointSensor(), duration=3.0),
     "ZV-shaped": fa.simulate(

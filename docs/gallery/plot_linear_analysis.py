@@ -30,6 +30,10 @@ print("poles (rad/s):", upper(tip.poles()))
 print("joint-angle zeros:", upper(joint.transmission_zeros()))
 print("tip zeros:", upper(tip.transmission_zeros(outputs=[1])))
 
+# %%
+# The frequency responses, computed from the state-space matrices, and the pole-zero map
+# of the tip's transfer: the zeros at about +-39 rad/s are real.
+
 
 def frequency_response(sys, w, output):
     """|G(jw)| and its phase from input 0 to ``output``, from the matrices."""
