@@ -26,7 +26,8 @@ What is measured (the issue's targets in brackets):
     peak resident set (``ru_maxrss``) beside the same interpreter's after importing
     and warming up (the libraries: NumPy, SciPy, Numba and LLVM) [<= 250 MB].
 ``reproduce`` (``--reproduce``)
-    ``flexarm reproduce`` (defaults: matrix, sensitivity, beyond) in a fresh
+    ``flexarm reproduce`` (defaults: matrix, sensitivity, converged arm, beyond; and
+    with ``--no-converged``, what the trees before issue 13 ran) in a fresh
     interpreter, wall time; with ``--before PATH`` also the same command from
     another source tree (e.g. a worktree of the commit before the batched
     simulator) for the before/after figure.
@@ -146,19 +147,28 @@ def long_run() -> dict[str, Any]:
     return dict(json.loads(out.stdout.strip().splitlines()[-1]))
 
 
-def reproduce(src: str | None) -> dict[str, Any]:
+def reproduce(src: str | None, *options: str) -> dict[str, Any]:
     env = dict(os.environ)
     if src is not None:
         env["PYTHONPATH"] = os.path.join(src, "src")
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
         subprocess.run(
-            [sys.executable, "-m", "flexarm", "reproduce", "--out", os.path.join(tmp, "r")],
+            [
+                sys.executable,
+                "-m",
+                "flexarm",
+                "reproduce",
+                "--out",
+                os.path.join(tmp, "r"),
+                *options,
+            ],
             check=True,
             capture_output=True,
             env=env,
         )
-        return {"wall_s": time.perf_counter() - t0, "source": src or "this tree"}
+        wall = time.perf_counter() - t0
+        return {"wall_s": wall, "source": src or "this tree", "options": " ".join(options)}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -175,7 +185,9 @@ def main(argv: list[str] | None = None) -> int:
     out["batch"] = batch(args.runs, args.batch_repeat)
     out["long_run"] = long_run()
     if args.reproduce:
-        out["reproduce"] = [reproduce(None)]
+        # the converged arm (issue 13) came after the batched simulator: without it,
+        # this tree runs what the tree before did
+        out["reproduce"] = [reproduce(None), reproduce(None, "--no-converged")]
         if args.before:
             out["reproduce"].append(reproduce(args.before))
     out["machine"]["loadavg_at_end"] = list(os.getloadavg())
@@ -212,7 +224,7 @@ def main(argv: list[str] | None = None) -> int:
         f"{lr['rss_peak_bytes'] / mb:.1f} MB peak"
     )
     for r in out.get("reproduce", []):
-        print(f"\nflexarm reproduce ({r['source']}): {r['wall_s']:.1f} s")
+        print(f"\nflexarm reproduce {r['options']} ({r['source']}): {r['wall_s']:.1f} s")
     return 0
 
 

@@ -25,7 +25,7 @@ def test_ruff_clean():
     if ruff is None:
         pytest.skip("ruff is not installed (pip install -e '.[test]')")
     res = subprocess.run(
-        [*ruff, "check", "src", "tests", "benchmarks", "examples"],
+        [*ruff, "check", "src", "tests", "benchmarks", "examples", "docs"],
         cwd=ROOT,
         capture_output=True,
         text=True,
@@ -39,7 +39,7 @@ def test_ruff_format_clean():
     if ruff is None:
         pytest.skip("ruff is not installed (pip install -e '.[test]')")
     res = subprocess.run(
-        [*ruff, "format", "--check", "src", "tests", "benchmarks", "examples"],
+        [*ruff, "format", "--check", "src", "tests", "benchmarks", "examples", "docs"],
         cwd=ROOT,
         capture_output=True,
         text=True,

@@ -106,8 +106,8 @@ def _wait_for_temporary(parent: Path, proc: subprocess.Popen[bytes]) -> Path:
 
 
 def _long_write(out: Path) -> subprocess.Popen[bytes]:
-    # 300 000 recorded rows: seconds of writing
-    proc, _ = _flexarm("simulate", "--duration", "1200", "--record-every", "4", "--out", str(out))
+    # 1.5 million recorded rows (0.2 ms a row): seconds of writing after a few of simulating
+    proc, _ = _flexarm("simulate", "--duration", "300", "--out", str(out))
     return proc
 
 

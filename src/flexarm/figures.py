@@ -292,7 +292,7 @@ def save_figure(
     Returns
     -------
     pathlib.Path
-        The file written (whole, or not at all: :func:`flexarm._io.atomic_path`).
+        The file written (whole, or not at all: ``flexarm._io.atomic_path``).
     """
     fmt = FigureFormat.coerce(figure_format)
     target = Path(path).with_suffix(fmt.suffix)

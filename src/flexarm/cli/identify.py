@@ -6,7 +6,7 @@
 * ``flexarm identify study`` — its Monte Carlo convergence rate
   (:func:`flexarm.ident.convergence_study`);
 * ``flexarm identify hammerstein [DATA]`` — a Hammerstein model of a data
-  file, or the robot-joint experiment (:mod:`flexarm.cli._hammerstein`).
+  file, or the robot-joint experiment (``flexarm.cli._hammerstein``).
 
 The commands parse, call the library and print; the library reads the files
 (:mod:`flexarm.ident.data`), holds the defaults and draws the figures. Only

@@ -317,9 +317,9 @@ def add_parser(sub: Any) -> None:
         "joint-pd: JointPD; fuzzy: the paper's gains with the fuzzy adaptive law "
         "(FuzzyAdaptiveJTPD; set ks and law in the scenario file); lqg: observer-based "
         "LQG from the sensor alone with rigid feedforward; reflected: PD on the reflected "
-        "output (alpha in the scenario file); MODULE:FACTORY: your own, FACTORY(arm, **the "
-        "scenario's other controller keys) returning a Controller (module from the current "
-        "directory or sys.path; examples/my_controller.py)",
+        "output (alpha in the scenario file); MODULE:FACTORY: your own, FACTORY(arm, the "
+        "scenario's other controller keys as keywords) returning a Controller (module from "
+        "the current directory or sys.path; examples/my_controller.py)",
     )
     sim.add_argument(
         "--sensor",

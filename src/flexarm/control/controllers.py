@@ -183,12 +183,15 @@ class Controller:
 
     @property
     def cfunc(self) -> CFunc:  # pragma: no cover - interface
+        """The compiled law, a ``numba.cfunc`` with :data:`CONTROL_SIGNATURE`."""
         raise NotImplementedError
 
     def parameters(self, arm: Plant) -> NDArray[np.float64]:  # pragma: no cover - interface
+        """The ``params`` vector of the law for ``arm``."""
         raise NotImplementedError
 
     def initial_state(self, arm: Plant) -> NDArray[np.float64]:
+        """The initial ``state`` vector of the law for ``arm`` (default: empty)."""
         return np.zeros(0)
 
     def parameters_for(self, arm: Plant, sensor: Sensor | None) -> NDArray[np.float64]:

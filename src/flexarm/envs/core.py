@@ -208,8 +208,8 @@ class ArmBatch:
         self.state.noise_row[i] = 0
 
     def step(self, active: I64, generators: list[np.random.Generator | None]) -> None:
-        """One control period of the arms with ``active[i]``, holding :attr:`action`
-        (N m, shape (n, n_links)); results in :attr:`state`."""
+        """One control period of the arms with ``active[i]``, holding ``action``
+        (N m, shape (n, n_links)); results in ``state``."""
         st = self.state
         if st.noise.shape[1]:
             for i in np.flatnonzero(st.noise_row >= st.noise.shape[1]):

@@ -60,18 +60,30 @@ RUNNING, DIVERGED, TRUNCATED = 0, 1, 2
 class EnvArrays(NamedTuple):
     """What every arm of a batch shares (constant over episodes).
 
-    sensor: the sensor and its delay (:class:`flexarm.sim.loop.SensorArrays`; its
-        ``noise`` field is unused: noise comes from :attr:`BatchState.noise`).
-    levels: (n_ch,) noise standard deviation of each channel (rad, rad/s, m, m/s).
-    pade_gain: (p,) steady-state gain of the discrete Padé filter's state.
-    target: (n_steps + 1, 4) the reference's x, y (m), vx, vy (m/s) at each instant.
-    limit: (n_links,) torque limits, N m.
-    max_deflection: (n_links,) tip deflections beyond which the arm diverged, m.
-    tip_phi: (n_modes of the last link,) its mode shapes at its tip.
-    low, high: (n_obs,) bounds of the observation.
-    params: (5,) control period dt (s), tracking weight (1/m**2), effort weight,
+    Attributes
+    ----------
+    sensor : SensorArrays
+        The sensor and its delay (:class:`flexarm.sim.loop.SensorArrays`; its
+        ``noise`` field is unused: noise comes from ``BatchState.noise``).
+    levels : (n_ch,)
+        Noise standard deviation of each channel (rad, rad/s, m, m/s).
+    pade_gain : (p,)
+        Steady-state gain of the discrete Padé filter's state.
+    target : (n_steps + 1, 4)
+        The reference's x, y (m), vx, vy (m/s) at each instant.
+    limit : (n_links,)
+        Torque limits, N m.
+    max_deflection : (n_links,)
+        Tip deflections beyond which the arm diverged, m.
+    tip_phi : (n_modes of the last link,)
+        The last link's mode shapes at its tip.
+    low, high : (n_obs,)
+        Bounds of the observation.
+    params : (5,)
+        Control period dt (s), tracking weight (1/m**2), effort weight,
         divergence penalty, joint-rate limit (rad/s).
-    counts: int64 (2,) RK4 substeps per period, steps per episode.
+    counts : int64 (2,)
+        RK4 substeps per period, steps per episode.
     """
 
     sensor: SensorArrays

@@ -65,7 +65,7 @@ suggests; the supports, half-width 0.5, are our decision); MIN, MIN, MAX,
 centroid; the rule table
 
 ========  ====  ====  ====
-δ1 \ δ2    N     ZERO  P
+δ1 \\ δ2  N     ZERO  P
 ========  ====  ====  ====
 N         PMAX  PM    PMAX
 ZERO      PM    ZERO  PM

@@ -404,7 +404,7 @@ def workspace_size(system: CompiledFuzzySystem) -> int:
 
 def evaluate(system: CompiledFuzzySystem, x: FloatArray) -> float:
     """Compiled centroid output of a packed system at one input vector ``x`` (shape
-    (n_in,)); checked (:func:`_evaluate`)."""
+    (n_in,)); checked (``_evaluate``)."""
     n_in = _check_system(system, "evaluate")
     _check_inputs(x, n_in, "evaluate", batch=False)
     return float(_evaluate(system, x))
@@ -412,7 +412,7 @@ def evaluate(system: CompiledFuzzySystem, x: FloatArray) -> float:
 
 def evaluate_into(system: CompiledFuzzySystem, x: FloatArray, buf: FloatArray) -> float:
     """:func:`evaluate` with caller-owned scratch ``buf`` of at least
-    :func:`workspace_size` entries; checked (:func:`_evaluate_into`)."""
+    :func:`workspace_size` entries; checked (``_evaluate_into``)."""
     owner = "evaluate_into"
     n_in = _check_system(system, owner)
     _check_inputs(x, n_in, owner, batch=False)

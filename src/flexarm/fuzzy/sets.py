@@ -255,7 +255,7 @@ class Variable:
 
 @dataclass(frozen=True, eq=False)
 class Rule:
-    """``IF input_0 IS antecedent[0] AND ... THEN output IS consequent``.
+    """``IF input_0 IS antecedent[0] AND … THEN output IS consequent``.
 
     ``antecedent`` holds one term name per input, or ``None`` for "don't care".
     """

@@ -344,7 +344,8 @@ class FuzzySystem:
     # --------------------------------------------------------------- compiled
 
     def compiled(self) -> CompiledFuzzySystem:
-        """The system as plain arrays for :func:`evaluate` / :func:`evaluate_many`.
+        """The system as plain arrays for :func:`~flexarm.fuzzy.compiled.evaluate` /
+        :func:`~flexarm.fuzzy.compiled.evaluate_many`.
 
         Raises
         ------

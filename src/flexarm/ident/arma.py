@@ -111,7 +111,7 @@ def _fit_order(h: F64, order: int) -> tuple[F64, F64]:
 def arma_from_impulse_response(
     h: ArrayLike, order: int | str = "bic", max_order: int = 4
 ) -> ARMAFit:
-    """Fit the paper's ARMA(l, l) model to an impulse response ``h_0 .. h_{L-1}``.
+    """Fit the paper's ARMA(l, l) model to an impulse response ``h_0, …, h_{L-1}``.
 
     For each ``l`` the AR part comes from Prony's equations
     ``h_k = a1 h_{k-1} + ... + al h_{k-l}`` (``k > l``) by linear least squares,

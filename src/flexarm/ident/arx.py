@@ -10,12 +10,12 @@ Model (the paper's Hammerstein system, Fig. 5, any input):
 (:mod:`flexarm.ident.hatbasis`), normalised to mean zero over the inputs.
 
 Estimation, for a given order ``l`` and knot count ``K``
-------------------------------------------------------
+----------------------------------------------------------
 1. **Over-parameterised least squares** (Chang & Luus 1971; Bai 1998): with
    ``phi = sum_k c_k g_k``, the products ``theta_jk = b_j c_k`` enter linearly,
    so ``y`` is regressed on its lags and on the hats of the lagged inputs
    (centred: the intercept is profiled out). The normal equations are summed
-   by a compiled loop (:mod:`flexarm.ident._arx_loops`) that touches the
+   by a compiled loop (``flexarm.ident._arx_loops``) that touches the
    ``l + 2 (l + 1)`` non-zero entries of each row only.
 2. **Rank-one separation** (Bai's two-stage algorithm): the ``(l + 1) x (K - 1)``
    array ``theta_jk`` is ``b c^T``; its leading singular pair gives ``b`` and
@@ -156,7 +156,7 @@ class StructureFit:
         return self.simulate_located(*locate(u, self.knots))
 
     def simulate_located(self, segment: I64, position: F64) -> F64:
-        """:meth:`simulate` for inputs already located on :attr:`knots` (:func:`locate`)."""
+        """:meth:`simulate` for inputs already located on ``knots`` (:func:`locate`)."""
         from scipy.signal import lfilter
 
         w = evaluate(segment, position, self.phi)

@@ -56,7 +56,7 @@ I64 = NDArray[np.int64]
 
 
 def circular_blocks(n: int, block: int, rng: np.random.Generator) -> I64:
-    """Indices of one circular block resample of ``0 .. n-1``, shape (n,)."""
+    """Indices of one circular block resample of ``0, …, n-1``, shape (n,)."""
     starts = rng.integers(0, n, math.ceil(n / block))
     idx: I64 = ((starts[:, None] + np.arange(block)[None, :]) % n).ravel()[:n]
     return idx

@@ -20,7 +20,7 @@ keeps every sample by design.
   mode only after a memory check: it keeps them all).
 
 A bandwidth rule (``"silverman"``) needs every sample at once; the estimators
-refuse it here, naming ``bandwidth`` (:func:`flexarm.ident._setup.smoothing`).
+refuse it here, naming ``bandwidth`` (``flexarm.ident._setup.smoothing``).
 """
 
 from __future__ import annotations

@@ -47,7 +47,7 @@ The white path's state is the lag regressions' running sums:
 :meth:`~HammersteinIdentifier.save` / :meth:`~HammersteinIdentifier.load`
 resume it exactly (the streaming state, :mod:`flexarm.ident.accumulators`).
 The correlated path needs the whole record (one :meth:`~HammersteinIdentifier.fit`);
-its fitted model is saved and loaded too (:mod:`flexarm.ident._hammerstein_io`).
+its fitted model is saved and loaded too (``flexarm.ident._hammerstein_io``).
 """
 
 from __future__ import annotations

@@ -10,7 +10,8 @@ Three estimators share one implementation:
   estimate, weights ``h_i**(-d) K((x - X_i)/h_i)``; with a bandwidth per
   dimension ``h_i**(-d)`` means ``prod_j h_ij**(-1)``.
 
-``i`` is 1-based and counts every sample seen, across :meth:`partial_fit` calls.
+``i`` is 1-based and counts every sample seen, across
+:meth:`~SemiRecursiveKernelRegression.partial_fit` calls.
 
 Modes
 -----
@@ -18,12 +19,15 @@ The estimator validates its hyperparameters into a constant
 :class:`~flexarm.ident.accumulators.Smoothing` and chooses the accumulator that
 keeps the streaming state (:mod:`flexarm.ident.accumulators`, one per mode):
 
-* **exact** (``grid=None``): the samples are stored; :meth:`predict` evaluates
-  eq. 14 at any point (by the Gaussian series where ``series`` selects it);
+* **exact** (``grid=None``): the samples are stored;
+  :meth:`~SemiRecursiveKernelRegression.predict` evaluates eq. 14 at any point (by the
+  Gaussian series where ``series`` selects it);
 * **grid** (``grid`` given): running sums ``numerator_`` and ``denominator_``
-  at the grid points; :meth:`predict` accepts grid points only;
+  at the grid points; :meth:`~SemiRecursiveKernelRegression.predict` accepts grid points
+  only;
 * **binned** (``grid`` and ``binned=r``, ``d = 1``): linear binning, with the
-  error bound of :mod:`flexarm.ident.binning` (:meth:`error_bound`);
+  error bound of :mod:`flexarm.ident.binning`
+  (:meth:`~SemiRecursiveKernelRegression.error_bound`);
 * **series** (``grid``, Gaussian, one bandwidth, ``d = 1``; chosen by the
   default ``series="auto"``, or ``series=True``): cluster moments of a fast
   Gauss transform, ``O(n + m)`` work, equal to direct summation to rounding
@@ -45,7 +49,7 @@ mode (:mod:`flexarm.ident.chunked`).
 
 :meth:`~SemiRecursiveKernelRegression.save` writes the hyperparameters and the
 accumulator's :meth:`~flexarm.ident.accumulators.Accumulator.state` — one
-description, plain arrays (:mod:`flexarm.ident._persist`) — to one ``.npz`` file;
+description, plain arrays (``flexarm.ident._persist``) — to one ``.npz`` file;
 :meth:`~SemiRecursiveKernelRegression.load` rebuilds the estimator and its
 accumulator from it (:meth:`~flexarm.ident.accumulators.Accumulator.from_state`),
 and continuing with ``partial_fit`` gives bit for bit what never stopping
@@ -59,8 +63,8 @@ evaluated on the samples of the first ``fit`` or ``partial_fit`` call). With
 ``h_i**d = bandwidth**d i**(-d decay)``, the consistency conditions of
 Theorem 1, ``h_i -> 0`` and ``sum h_i**d = inf``, hold iff ``0 < decay <= 1/d``.
 ``decay = 0`` (fixed ``h``, the classical estimate) is also allowed;
-``decay < 0`` or ``decay > 1/d`` is rejected — by :meth:`fit`, since ``d`` is
-known only there.
+``decay < 0`` or ``decay > 1/d`` is rejected — by
+:meth:`~SemiRecursiveKernelRegression.fit`, since ``d`` is known only there.
 """
 
 from __future__ import annotations
@@ -96,7 +100,7 @@ Bandwidth = float | ArrayLike | str | Silverman
 
 
 class NotFittedError(ValueError, AttributeError):
-    """Raised when an estimator is used before :meth:`fit` (as in scikit-learn)."""
+    """Raised when an estimator is used before ``fit`` (as in scikit-learn)."""
 
 
 class _KernelRegression(HyperParameters):

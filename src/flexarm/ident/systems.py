@@ -328,7 +328,7 @@ def _check_coefficients(a: ArrayLike, b: ArrayLike, owner: str) -> tuple[F64, F6
 
 
 def spectral_radius(a: ArrayLike) -> float:
-    """Largest modulus of the roots of ``z**p - a1 z**(p-1) - ... - ap`` (0 for ``p = 0``)."""
+    """Largest modulus of the roots of ``z**p - a1 z**(p-1) - … - ap`` (0 for ``p = 0``)."""
     aa = np.asarray(a, dtype=np.float64).ravel()
     if aa.shape[0] == 0:
         return 0.0
@@ -346,7 +346,7 @@ class ARMA:
     ----------
     a : sequence of float, length p >= 0
         Autoregressive coefficients ``(a1, ..., ap)``; the roots of
-        ``z**p - a1 z**(p-1) - ... - ap`` must lie strictly inside the unit
+        ``z**p - a1 z**(p-1) - … - ap`` must lie strictly inside the unit
         circle (``ValueError`` otherwise).
     b : sequence of float, length q + 1 >= 1
         Moving-average coefficients ``(b0, ..., bq)``, not all zero.
@@ -378,7 +378,7 @@ class ARMA:
 
     @property
     def poles(self) -> NDArray[np.complex128]:
-        """Roots of ``z**p - a1 z**(p-1) - ... - ap``, shape (p,)."""
+        """Roots of ``z**p - a1 z**(p-1) - … - ap``, shape (p,)."""
         if not self.a:
             return np.zeros(0, dtype=np.complex128)
         out: NDArray[np.complex128] = np.roots(self.denominator).astype(np.complex128)
@@ -424,7 +424,7 @@ EXAMPLE_ARMA: dict[str, ARMA] = {
     "order3": ARMA(a=(0.9, -0.5, 0.2), b=(1.0, -0.3, 0.2, 0.0)),
     "resonant": ARMA(a=(1.6, -0.8), b=(0.5, 0.3, 0.0)),
 }
-"""A few stable ARMA systems (orders 1, 2, 3 and a lightly damped resonance, |pole| = 0.89)."""
+"""A few stable ARMA systems (orders 1, 2, 3 and a lightly damped resonance, ``|pole| = 0.89``)."""
 
 
 # --------------------------------------------------------------------------- simulation

@@ -125,7 +125,7 @@ class FlexibleArm(Backends, RigidKinematics):
     boundary : {"clamped-mass", "clamped-free"}
         Boundary conditions of the assumed modes (module docstring); default
         ``"clamped-mass"``, which converges with a few modes where the paper's
-        ``"clamped-free"`` does not (README, "How many modes").
+        ``"clamped-free"`` does not (user guide, "How many modes").
     joints : sequence of LinearJoint or NonlinearJoint, optional
         One flexible joint per link (None: rigid joints). Adds the motor angles
         to ``q``.

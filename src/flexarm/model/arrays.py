@@ -58,6 +58,7 @@ __all__ = [
     "STATIC",
     "ArmArrays",
     "Workspace",
+    "field_shapes",
     "make_workspace",
     "pack_arm_arrays",
     "workspace_shapes",
@@ -210,6 +211,32 @@ def make_workspace(n_dof: int) -> Workspace:
     return Workspace(**{name: np.zeros(shape) for name, shape in workspace_shapes(n_dof).items()})
 
 
+def field_shapes(
+    n_links: int, n_dof: int, k: int, n_joints: int | None = None
+) -> dict[str, tuple[int, ...]]:
+    """The shape of each field of :class:`ArmArrays` of ``n_links`` links, ``n_dof``
+    degrees of freedom, ``k`` foreshortened modes a link at the most and ``n_joints``
+    flexible joints (``n_links`` or none; default ``n_links``)."""
+    n = n_dof
+    return {
+        "link": (n_links, N_LINK_COLUMNS),
+        "mass_integral": (n,),
+        "moment_integral": (n,),
+        "tip_deflection": (n,),
+        "tip_slope": (n,),
+        "modal_mass": (n, n),
+        "stiffness": (n,),
+        "damping": (n,),
+        "payload": (2,),
+        "joint": (n_links if n_joints is None else n_joints, N_JOINT_COLUMNS),
+        "shortening_tip": (n, n),
+        "shortening_mass": (n, n),
+        "shortening_moment": (n, n),
+        "shortening_cubic": (n, k, k),
+        "shortening_quartic": (n, k, k, k),
+    }
+
+
 def pack_arm_arrays(
     *,
     mode_start: NDArray[np.int64],
@@ -244,23 +271,9 @@ def pack_arm_arrays(
     ms = np.ascontiguousarray(mode_start, dtype=np.int64)
     n_links = ms.shape[0] - 1
     n = int(np.asarray(mass_integral).shape[0])
-    shapes = {
-        "link": (n_links, N_LINK_COLUMNS),
-        "mass_integral": (n,),
-        "moment_integral": (n,),
-        "tip_deflection": (n,),
-        "tip_slope": (n,),
-        "modal_mass": (n, n),
-        "stiffness": (n,),
-        "damping": (n,),
-        "payload": (2,),
-        "shortening_tip": (n, n),
-        "shortening_mass": (n, n),
-        "shortening_moment": (n, n),
-    }
     k = 0 if shortening_cubic is None else int(np.asarray(shortening_cubic).shape[-1])
-    shapes["shortening_cubic"] = (n, k, k)
-    shapes["shortening_quartic"] = (n, k, k, k)
+    shapes = field_shapes(n_links, n, k)
+    del shapes["joint"]  # its rows are checked below: none, or one per link
     none2, none3, none4 = np.zeros((n, n)), np.zeros((n, 0, 0)), np.zeros((n, 0, 0, 0))
     given = {
         "link": link,

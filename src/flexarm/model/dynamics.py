@@ -522,7 +522,7 @@ def _forward_dynamics(
 # loops, a user's own) the same name is the kernel itself, through an overload.
 def forward_dynamics(q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64) -> None:
     """``ddq = M(q)^-1 (B tau - C(q, dq) dq - K q - D dq + joint forces)``, into ``ddq``
-    (:func:`_forward_dynamics`; the parameters are checked when called from Python).
+    (``_forward_dynamics``; the parameters are checked when called from Python).
 
     Parameters
     ----------

@@ -53,7 +53,7 @@ def link_foreshortening(
     ``Mb[alpha, alpha] += -delta' X delta + 1/4 delta' Q delta``,
     ``Mb[alpha, delta] += R' delta - 1/2 R delta``, ``Mb[delta, delta] += Q``, and
     its inertial force at ``qddot = 0`` the terms written below (the NumPy
-    reference :func:`flexarm.model.lagrangian._link_body` has the derivation).
+    reference ``flexarm.model.lagrangian._link_body`` has the derivation).
     """
     nm = a1 - a0
     St, Sm, X = model.shortening_tip, model.shortening_mass, model.shortening_moment

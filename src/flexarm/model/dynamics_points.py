@@ -115,7 +115,7 @@ def _point_kinematics(
 def point_kinematics(
     q: F64, dq: F64, model: ArmArrays, link: int, distance: float, phi: F64, out: F64
 ) -> None:
-    """:func:`_point_kinematics` with its arguments checked (from Python; inside
+    """``_point_kinematics`` with its arguments checked (from Python; inside
     compiled code the kernel itself)."""
     owner = "point_kinematics"
     n_links, n = check_model(model, owner)

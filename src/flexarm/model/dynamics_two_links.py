@@ -233,7 +233,7 @@ def accelerations_two_links_one_mode(
     t2: float,
     model: ArmArrays,
 ) -> tuple[float, float, float, float]:
-    """:func:`_accelerations_two_links_one_mode`, its model checked: the paper's
+    """``_accelerations_two_links_one_mode``, its model checked: the paper's
     structure only."""
     _check_paper_structure(model, "accelerations_two_links_one_mode")
     out: tuple[float, float, float, float] = _accelerations_two_links_one_mode(

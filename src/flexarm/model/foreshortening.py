@@ -34,6 +34,7 @@ smooth shapes: ``S`` at each outer node by an inner rule on ``[0, x]``.
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -75,11 +76,21 @@ class Foreshortening(NamedTuple):
     quartic: F64
 
 
+@functools.lru_cache(maxsize=16)
+def _legendre_rule(n_nodes: int) -> tuple[F64, F64]:
+    """Gauss–Legendre nodes and weights on ``[-1, 1]`` (read-only: shared by every call
+    with ``n_nodes``; an eigenvalue problem each time was most of a linearisation)."""
+    t, w = np.polynomial.legendre.leggauss(n_nodes)
+    t.flags.writeable = False
+    w.flags.writeable = False
+    return t, w
+
+
 def _gauss(n_modes: int, roots: F64, a: float, b: float) -> tuple[F64, F64]:
     """Gauss–Legendre nodes and weights on ``[a, b]``, exact to rounding for these
     modes' slopes and their products (the rule of :class:`BeamModes`' integrals)."""
     lam_max = float(roots[-1]) if n_modes else 0.0
-    t, w = np.polynomial.legendre.leggauss(64 + 2 * math.ceil(lam_max))
+    t, w = _legendre_rule(64 + 2 * math.ceil(lam_max))
     half = 0.5 * (b - a)
     return a + half * (t + 1.0), half * w
 

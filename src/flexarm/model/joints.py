@@ -33,33 +33,33 @@ space-manipulator-class joint sized for the paper's arm (two 4.5 m links,
 about 81 kg m**2 about the shoulder when straight, joint torques of tens to a
 few hundred N m under the paper's gains):
 
-=========  ==============  =====================================================
-parameter  value           reasoning
-=========  ==============  =====================================================
-a1         1.0e4 N m/rad   harmonic-drive class (CSF-25 catalogue stiffness
-                           1.3e4–2.5e4 N m/rad); the rigid-link estimate of the
-                           shoulder's joint mode, sqrt(a1 / 81) = 11 rad/s, sits
-                           next to the links' 12.3 rad/s, so joint and link
-                           flexibility interact (``flexarm modes --joints
-                           linear`` prints the coupled frequencies)
-ksw        6.0e3 N m/rad   stiffness at zero deflection a1 - ksw = 0.4 a1, the
-                           low/high stiffness ratio of harmonic drives (~0.5)
-asw        1.6e7 1/rad**2  windup region |Delta| < 1/sqrt(asw) = 2.5e-4 rad, i.e.
-                           torques below (a1 - ksw) 2.5e-4 = 1 N m (Kircanski &
-                           Goldenberg)
-a2         4.0e7 N m/rad**3 hardening adds 10 % to the stiffness at 5e-3 rad
-                           (50 N m), a typical cubic fit of harmonic-drive curves
-J_m        0.3 kg m**2     rotor 3e-5 kg m**2 reflected through a 100:1 gear
-g1, g4     0.5, 1.0 N m    Stribeck excess and Coulomb level: breakaway about
-                           1.5 N m, 3 % of a 50 N m rated torque
-g2, g3     100, 10 s/rad   Stribeck velocity between 0.01 and 0.1 rad/s (as in
-                           Makkar et al.'s example, gamma = [0.25, 100, 10, 0.1,
-                           100, 0.01])
-g5         100 s/rad       Coulomb smoothing below 0.01 rad/s
-g6         0.5 N m s/rad   viscous friction of a greased gear
-=========  ==============  =====================================================
+=========  ================  =====================================================
+parameter  value             reasoning
+=========  ================  =====================================================
+a1         1.0e4 N m/rad     harmonic-drive class (CSF-25 catalogue stiffness
+                             1.3e4–2.5e4 N m/rad); the rigid-link estimate of the
+                             shoulder's joint mode, sqrt(a1 / 81) = 11 rad/s, sits
+                             next to the links' 12.3 rad/s, so joint and link
+                             flexibility interact (``flexarm modes --joints
+                             linear`` prints the coupled frequencies)
+ksw        6.0e3 N m/rad     stiffness at zero deflection a1 - ksw = 0.4 a1, the
+                             low/high stiffness ratio of harmonic drives (~0.5)
+asw        1.6e7 1/rad**2    windup region ``|Delta| < 1/sqrt(asw)`` = 2.5e-4 rad, i.e.
+                             torques below (a1 - ksw) 2.5e-4 = 1 N m (Kircanski &
+                             Goldenberg)
+a2         4.0e7 N m/rad**3  hardening adds 10 % to the stiffness at 5e-3 rad
+                             (50 N m), a typical cubic fit of harmonic-drive curves
+J_m        0.3 kg m**2       rotor 3e-5 kg m**2 reflected through a 100:1 gear
+g1, g4     0.5, 1.0 N m      Stribeck excess and Coulomb level: breakaway about
+                             1.5 N m, 3 % of a 50 N m rated torque
+g2, g3     100, 10 s/rad     Stribeck velocity between 0.01 and 0.1 rad/s (as in
+                             Makkar et al.'s example, gamma = [0.25, 100, 10, 0.1,
+                             100, 0.01])
+g5         100 s/rad         Coulomb smoothing below 0.01 rad/s
+g6         0.5 N m s/rad     viscous friction of a greased gear
+=========  ================  =====================================================
 
-``LinearJoint.default()`` uses ``k = a1`` and the same rotor.
+``LinearJoint.default()``   uses ``k = a1`` and the same rotor.
 """
 
 from __future__ import annotations

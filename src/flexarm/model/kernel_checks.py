@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array
 from ..errors import InvalidTypeError, InvalidValueError
-from .arrays import N_JOINT_COLUMNS, N_LINK_COLUMNS, ArmArrays, Workspace, workspace_shapes
+from .arrays import ArmArrays, Workspace, field_shapes, workspace_shapes
 
 __all__ = [
     "check_model",
@@ -103,23 +103,7 @@ def check_model(model: object, owner: str) -> tuple[int, int]:
         )
     k = np.asarray(model.shortening_cubic).shape[-1] if np.ndim(model.shortening_cubic) else 0
     n_joints = np.asarray(model.joint).shape[0] if np.ndim(model.joint) == 2 else -1
-    shapes: dict[str, tuple[int, ...]] = {
-        "link": (n_links, N_LINK_COLUMNS),
-        "mass_integral": (n,),
-        "moment_integral": (n,),
-        "tip_deflection": (n,),
-        "tip_slope": (n,),
-        "modal_mass": (n, n),
-        "stiffness": (n,),
-        "damping": (n,),
-        "payload": (2,),
-        "joint": (n_joints, N_JOINT_COLUMNS),
-        "shortening_tip": (n, n),
-        "shortening_mass": (n, n),
-        "shortening_moment": (n, n),
-        "shortening_cubic": (n, k, k),
-        "shortening_quartic": (n, k, k, k),
-    }
+    shapes = field_shapes(n_links, n, k, n_joints)
     for field, shape in shapes.items():
         check_vector(getattr(model, field), f"model.{field}", owner, shape)
     if n_joints not in (0, n_links) or n != ms[-1] + n_joints:

@@ -5,7 +5,7 @@ with its body Jacobian ``Jb(q)`` and body inertia ``Mb(q)``; then
 ``M = sum Jb' Mb Jb`` and, by d'Alembert, the velocity terms are
 ``C(q, dq) dq = sum Jb' beta`` with ``beta`` the body-frame inertial force at
 ``qddot = 0``. The kinematic map is in :mod:`flexarm.model.arm`, the
-foreshortening terms are derived in :func:`_link_body`; the compiled
+foreshortening terms are derived in ``_link_body``; the compiled
 kernels of :mod:`flexarm.model.dynamics` compute the same sums and the tests
 hold the two together (and both against an independent SymPy derivation).
 """

@@ -27,7 +27,7 @@ class Link:
         stiffening converges: against a geometrically exact reference (Exudyn's
         ANCF cables) its link tip deflections are within 0.2 % of their peak
         under torque pulses and on a prescribed square, where one mode is up to 45 %
-        off and two modes up to 1 % (README, "How many modes").
+        off and two modes up to 1 % (user guide, "How many modes").
     hub_mass : float
         Mass of the hub at this link's joint, in kg (>= 0). The hub sits at the
         previous link's tip, which carries it; the first link's hub sits on the

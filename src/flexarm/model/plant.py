@@ -3,7 +3,7 @@
 :class:`flexarm.FlexibleArm` is the plant flexarm builds; anything with these
 attributes (an identified model, a user's own arm packed the same way) can be
 simulated, sensed and controlled. The compiled parts read only
-:attr:`Plant.arrays`.
+``Plant.arrays``.
 """
 
 from __future__ import annotations

@@ -2,8 +2,9 @@
 
 The numbers come from holding flexarm against Exudyn's geometrically exact ANCF
 cables (``benchmarks/exudyn_study.py``; results in BENCHMARKS.md and the
-README's model section). Reports and error messages quote
-:data:`PAPER_MODEL_NOTE`; :meth:`flexarm.FlexibleArm.paper` documents the same.
+user guide's model choices and validity, ``docs/guide/validity.md``). Reports and error
+messages quote :data:`PAPER_MODEL_NOTE`; :meth:`flexarm.FlexibleArm.paper` documents the
+same.
 """
 
 from __future__ import annotations

@@ -212,7 +212,7 @@ def write_animation(
     """Write :func:`animate`'s frames to ``path`` (``.gif`` or ``.mp4``) atomically.
 
     A GIF is written by Pillow; an MP4 by ffmpeg (which must be on ``PATH``).
-    The file appears complete or not at all (:func:`flexarm._io.atomic_path`).
+    The file appears complete or not at all (``flexarm._io.atomic_path``).
 
     Parameters
     ----------

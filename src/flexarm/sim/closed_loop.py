@@ -163,7 +163,7 @@ def simulate(
     InvalidValueError
         For a bad parameter, a path out of the arm's workspace, a control period
         at which the loop is sampled-data unstable, or a run that would need
-        more memory or time than the limits allow (:mod:`flexarm._budget`:
+        more memory or time than the limits allow (``flexarm._budget``:
         ``FLEXARM_MAX_MEMORY``, ``FLEXARM_MAX_TIME``), which is refused before
         anything is allocated.
     """
@@ -441,7 +441,7 @@ def check_budget(
     :func:`simulate` checks each run before allocating anything; a batch (e.g.
     ``flexarm reproduce``) checks all of its ``runs`` at once before the first, with
     ``min(runs, 2 workers)`` runs in memory at a time and ``runs / workers`` runs'
-    time in all. Limits: :mod:`flexarm._budget` (``FLEXARM_MAX_MEMORY``,
+    time in all. Limits: ``flexarm._budget`` (``FLEXARM_MAX_MEMORY``,
     ``FLEXARM_MAX_TIME``).
 
     Parameters

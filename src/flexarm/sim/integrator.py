@@ -186,7 +186,7 @@ def rk4_step(
     ws: Workspace,
     s: F64,
 ) -> None:
-    """One classical RK4 step in place (:func:`_rk4_step`), arguments checked."""
+    """One classical RK4 step in place (``_rk4_step``), arguments checked."""
     owner = "rk4_step"
     n = _check_step(q, dq, (tau0, tau_mid, tau1), model, owner)
     check_workspace(ws, n, owner)
@@ -197,7 +197,7 @@ def rk4_step(
 def rk4_step_two_links_one_mode(
     q: F64, dq: F64, tau0: F64, tau_mid: F64, tau1: F64, h: float, model: ArmArrays
 ) -> None:
-    """:func:`rk4_step` for the paper's structure (:func:`_rk4_step_two_links_one_mode`),
+    """:func:`rk4_step` for the paper's structure (``_rk4_step_two_links_one_mode``),
     arguments checked."""
     owner = "rk4_step_two_links_one_mode"
     n = _check_step(q, dq, (tau0, tau_mid, tau1), model, owner)
@@ -210,7 +210,7 @@ def rk4_step_two_links_one_mode(
 
 
 def diverged(q: F64, dq: F64, model: ArmArrays, max_deflection: F64) -> bool:
-    """Whether the state diverged (:func:`_diverged`), arguments checked."""
+    """Whether the state diverged (``_diverged``), arguments checked."""
     owner = "diverged"
     n_links, n = check_model(model, owner)
     check_vector(q, "q", owner, (n,))

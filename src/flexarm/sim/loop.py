@@ -62,20 +62,29 @@ OK, DIVERGED = 0, 1
 class SensorArrays(NamedTuple):
     """The sensor as plain arrays (build with :func:`sensor_arrays`).
 
-    link: int64 (1,) — link of the sensed point, -1 for the joint encoders.
-    rigid: int64 (1,) — 1: the point is the rigid kinematics of the encoder
-        angles (the paper's sensor model), 0: the deflected point.
-    distance: (1,) — distance of the point along its link, m.
-    phi: (n_modes of link,) — mode shapes at the point (then, with geometric stiffening,
-         the link's shortening matrix there: FlexibleArm.point_basis).
-    levers: (n_links,) — lever lengths of the rigid kinematics of the encoder
-        angles (the link lengths for the joint encoders, the point's for the
-        paper's model), m.
-    delay_steps: int64 (1,) — exact delay in substeps (0: none unless Padé).
-    pade_ad, pade_bd, pade_cd, pade_dd: discrete Padé filter (order p): (p, p), (p,),
-        (p,), (1,); p = 0 for no Padé.
-    noise: (n_steps + 1, n_channels) additive noise per control instant, or (0, n_channels).
-    resolution: (n_channels,) quantisation steps (0: none).
+    Attributes
+    ----------
+    link : int64 (1,)
+        Link of the sensed point, -1 for the joint encoders.
+    rigid : int64 (1,)
+        1: the point is the rigid kinematics of the encoder angles (the paper's
+        sensor model), 0: the deflected point.
+    distance : (1,)
+        Distance of the point along its link, m.
+    phi : (n_modes of link,)
+        Mode shapes at the point (then, with geometric stiffening, the link's
+        shortening matrix there: FlexibleArm.point_basis).
+    levers : (n_links,)
+        Lever lengths of the rigid kinematics of the encoder angles (the link
+        lengths for the joint encoders, the point's for the paper's model), m.
+    delay_steps : int64 (1,)
+        Exact delay in substeps (0: none unless Padé).
+    pade_ad, pade_bd, pade_cd, pade_dd : (p, p), (p,), (p,), (1,)
+        Discrete Padé filter of order p; p = 0 for no Padé.
+    noise : (n_steps + 1, n_channels)
+        Additive noise per control instant, or (0, n_channels).
+    resolution : (n_channels,)
+        Quantisation steps (0: none).
     """
 
     link: I64
@@ -490,7 +499,7 @@ def _check_sensor(sensor: SensorArrays, model: ArmArrays, owner: str) -> tuple[i
 
 
 def sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> None:
-    """The raw sensed signal (:func:`_sense`), arguments checked."""
+    """The raw sensed signal (``_sense``), arguments checked."""
     owner = "sense"
     _, n = check_model(model, owner)
     n_ch, _ = _check_sensor(sensor, model, owner)
@@ -520,7 +529,7 @@ def run(
     out_tau: F64,
     out_y: F64,
 ) -> tuple[int, int]:
-    """The compiled loop (:func:`_run`: its docstring has the semantics) over
+    """The compiled loop (``_run``: its docstring has the semantics) over
     ``k0 <= k < k1``, every array it will index checked first."""
     owner = "run"
     n_links, n = check_model(model, owner)

@@ -44,14 +44,24 @@ _OWNER = "convergence_check"
 class ConvergenceCase(NamedTuple):
     """One basis against the richest.
 
-    n_modes : modes per link.
-    deflection_error : (n_links,) largest |tip deflection - richest's| over time, m.
-    relative_deflection_error : (n_links,) the same over the richest's peak deflection.
-    tip_error : largest |end effector - richest's| over time, m.
-    relative_tip_error : the same over the last link's peak deflection.
-    n_dof : coordinates of the model.
-    wall_time_s : the run's wall time, s.
-    diverged : whether the run diverged (errors are then infinite).
+    Attributes
+    ----------
+    n_modes : tuple of int
+        Modes per link.
+    deflection_error : (n_links,)
+        Largest ``|tip deflection - richest's|`` over time, m.
+    relative_deflection_error : (n_links,)
+        The same over the richest's peak deflection.
+    tip_error : float
+        Largest ``|end effector - richest's|`` over time, m.
+    relative_tip_error : float
+        The same over the last link's peak deflection.
+    n_dof : int
+        Coordinates of the model.
+    wall_time_s : float
+        The run's wall time, s.
+    diverged : bool
+        Whether the run diverged (errors are then infinite).
     """
 
     n_modes: tuple[int, ...]

@@ -129,7 +129,7 @@ def sweep(
     Returns
     -------
     SweepTable
-        One row per run in sweep order; :attr:`SweepTable.info` says how it ran.
+        One row per run in sweep order; ``SweepTable.info`` says how it ran.
 
     Raises
     ------

@@ -55,7 +55,7 @@ def iter_records(items: Iterable[Item], *, workers: int | None = None) -> Iterat
     Yields
     ------
     Record
-        In the order the runs finish (:attr:`Record.run_id` says which).
+        In the order the runs finish (``Record.run_id`` says which).
     """
     ids: list[str] = []
 

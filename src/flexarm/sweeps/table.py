@@ -135,7 +135,7 @@ class SweepTable:
         metrics : sequence of str
             The metrics to keep (names of :data:`~flexarm.sweeps.spec.METRICS`).
         info : dict, optional
-            Stored as :attr:`info`.
+            Stored as ``info``.
         """
         done = [(run, records[run.run_id]) for run in runs if run.run_id in records]
         cols: dict[str, list[object]] = {

@@ -21,7 +21,7 @@ The interface also has :meth:`Accumulator.chunk_partials` (a chunk's partial
 sums, computed anywhere) and :meth:`Accumulator.add_partials` (combined in
 order). Compiled work over independent outputs (exact mode's query points,
 grid mode's grid points) is split over the cores from the main thread
-(:mod:`~flexarm.ident.accumulators._threads`; the same numbers bit for bit).
+(``flexarm.ident.accumulators._threads``; the same numbers bit for bit).
 
 :func:`choose` picks the class from the estimate's :class:`Smoothing` (the
 estimators call it; a user never needs to).

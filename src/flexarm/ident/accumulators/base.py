@@ -202,7 +202,7 @@ class Accumulator(ABC):
     def add_partials(self, partials: ChunkPartials) -> None:
         """Combine a chunk's partials (from :meth:`chunk_partials`), in sample order.
 
-        ``partials.start`` must equal :attr:`n_samples`.
+        ``partials.start`` must equal ``n_samples``.
         """
         self._check_start(partials)
         for blk in partials.blocks:

@@ -42,7 +42,7 @@ BLOCK = 2**16
 
 
 def segments(start: int, m: int, block: int) -> Iterator[tuple[int, int, bool]]:
-    """The pieces of samples ``start .. start + m - 1`` (0-based) that lie in one block each.
+    """The pieces of samples ``start, …, start + m - 1`` (0-based) that lie in one block each.
 
     Yields ``(a, b, closes)``: offsets into the chunk (``0 <= a < b <= m``) and
     whether sample ``start + b - 1`` is the last of its block.

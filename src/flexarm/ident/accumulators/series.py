@@ -14,7 +14,7 @@ summation to ``|N_s - N| <= 1e-13 A``, ``|D_s - D| <= 1e-13 D`` (``A = sum w_i
 every sample the direct weights are subnormal numbers or zero (direct
 summation itself loses its precision there, and gives NaN past 38.61 h): at
 those points the estimate takes the direct sums, kept alongside for them
-(grid mode: the *band* sums of :func:`~flexarm.ident.accumulators._loops.band_update_1d`;
+(grid mode: the *band* sums of ``flexarm.ident.accumulators._loops.band_update_1d``;
 exact mode: the stored samples), so it equals direct summation **bit for
 bit** there, NaN included.
 """
@@ -55,7 +55,7 @@ F64 = NDArray[np.float64]
 SERIES_MAX_CLUSTERS = 2**22
 #: ``series="auto"`` in grid mode takes the series up to this many clusters (state
 #: ``2 x 2 x 28 x 8`` bytes a cluster) and when a sample's window holds this many grid
-#: points or more (:data:`SERIES_AUTO_POINTS`); otherwise the direct grid sums.
+#: points or more (``SERIES_AUTO_POINTS``); otherwise the direct grid sums.
 SERIES_AUTO_CLUSTERS = 2**14
 SERIES_AUTO_POINTS = 8
 #: The series is used where a non-empty cluster's centre lies within this many ``h``

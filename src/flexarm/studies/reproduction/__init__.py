@@ -1,4 +1,4 @@
-"""The paper's experiments in one call: :func:`reproduce`.
+"""The paper's experiments in one call: :func:`~flexarm.studies.reproduction.study.reproduce`.
 
 The matrix {nonadaptive PD, fuzzy adaptive} x {joint sensor, end-effector
 sensor, sensor 0.5 m from the elbow} on the default square (paper.md §4), a
