@@ -9,7 +9,11 @@
 * :mod:`~flexarm.model.prescribed` — the arm with its joint motion prescribed;
 * :mod:`~flexarm.model.validity` — what the model choices leave out, measured;
 * :mod:`~flexarm.model.arrays`, :mod:`~flexarm.model.dynamics` — the arm packed as plain
-  arrays and the compiled kernels that read them (for your own Numba loops);
+  arrays and the compiled kernels that read them (for your own Numba loops), the
+  recursive (articulated-body) one in :mod:`~flexarm.model.dynamics_recursive`;
+* :mod:`~flexarm.model.packed`, :mod:`~flexarm.model.backends` — the kernels behind
+  cheap calls from Python (one packed buffer per arm), and which backend a public call
+  of the arm takes;
 * :mod:`~flexarm.model.plant` — :class:`Plant`, what the simulator reads of an arm.
 """
 

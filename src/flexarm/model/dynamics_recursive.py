@@ -328,7 +328,7 @@ def _accelerations_recursive(
 
 
 def accelerations_recursive(q: F64, dq: F64, model: ArmArrays, ws: Workspace, ddq: F64) -> None:
-    """:func:`_accelerations_recursive` (``ws.rhs`` holds the generalised forces),
+    """``_accelerations_recursive`` (``ws.rhs`` holds the generalised forces),
     its arguments checked: from Python, for tests; the checked face of the whole
     recursive path is :func:`flexarm.model.dynamics.forward_dynamics_recursive`."""
     from .kernel_checks import check_model, check_vector, check_workspace

@@ -458,7 +458,7 @@ class PackedArm:
         A mass matrix with room for a workspace in its rows below.
     bases : dict
         Memo of point bases ``(link, distance) -> phi`` that the arm fills, at
-        most :attr:`MAX_BASES` (the oldest goes first).
+        most ``MAX_BASES`` (the oldest goes first).
     """
 
     buf: F64
@@ -486,7 +486,7 @@ class PackedArm:
     def from_arrays(cls, arrays: ArmArrays, tip: F64 | None = None) -> PackedArm:
         """Pack ``arrays`` (:attr:`flexarm.FlexibleArm.arrays`, or any plant's);
         ``tip`` is the last link's basis at its tip
-        (:meth:`flexarm.FlexibleArm.point_basis`), for :attr:`tip`."""
+        (:meth:`flexarm.FlexibleArm.point_basis`), kept as ``tip``."""
         n_links, n = arrays.mode_start.shape[0] - 1, arrays.mass_integral.shape[0]
         length = float(arrays.link[n_links - 1, LEN])
         tip_basis = None if tip is None else _frozen(tip)
