@@ -169,22 +169,22 @@ def _unpack(buf: F64) -> ArmArrays:  # pragma: no cover - compiled
     o += n * k * k
     shortening_quartic = _view(buf, o, (n, k, k, k), np.float64)
     return ArmArrays(
-        ms,
-        link,
-        vectors[0],
-        vectors[1],
-        vectors[2],
-        vectors[3],
-        modal_mass,
-        stiffness,
-        damping,
-        payload,
-        joint,
-        shortening[0],
-        shortening[1],
-        shortening[2],
-        shortening_cubic,
-        shortening_quartic,
+        mode_start=ms,
+        link=link,
+        mass_integral=vectors[0],
+        moment_integral=vectors[1],
+        tip_deflection=vectors[2],
+        tip_slope=vectors[3],
+        modal_mass=modal_mass,
+        stiffness=stiffness,
+        damping=damping,
+        payload=payload,
+        joint=joint,
+        shortening_tip=shortening[0],
+        shortening_mass=shortening[1],
+        shortening_moment=shortening[2],
+        shortening_cubic=shortening_cubic,
+        shortening_quartic=shortening_quartic,
     )
 
 
@@ -220,7 +220,19 @@ def _workspace(wbuf: F64, n: int, mass: F64) -> Workspace:  # pragma: no cover -
     axial = _view(wbuf, o, (AX_ROWS + 3 * n, max(n, 3)), np.float64)
     o += (AX_ROWS + 3 * n) * max(n, 3)
     chain = _view(wbuf, o, (n, N_CHAIN_COLUMNS), np.float64)
-    return Workspace(mass, bias, jac, angle, rhs, rows, lmass, lbias, inv_diag, axial, chain)
+    return Workspace(
+        mass=mass,
+        bias=bias,
+        jac=jac,
+        angle=angle,
+        rhs=rhs,
+        rows=rows,
+        lmass=lmass,
+        lbias=lbias,
+        inv_diag=inv_diag,
+        axial=axial,
+        chain=chain,
+    )
 
 
 @nb.njit(inline="always")
