@@ -194,7 +194,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.json:
         print(json.dumps(out, indent=2))
         return 0
-    print_machine(out["machine"])
+    print_machine(out["machine"], "numpy")
     o = out["one_run"]
     print("\none run: the paper's 20 s square, dt 0.2 ms (best / median)")
     print(
