@@ -9,7 +9,7 @@ import re
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
 from flexarm import FlexibleArm, Link, simulate
@@ -231,6 +231,11 @@ def scenarios(draw):
 
 @SLOW
 @given(data=scenarios())
+# found by Hypothesis on a fresh example database: an overflow warning, a key not given
+# blamed, a singular mass matrix from NumPy
+@example(data={"trajectory": {"time_per_side": 1e300}})
+@example(data={"trajectory": {"time_per_side": 1e-9}})
+@example(data={"arm": {"payload_inertia": 1e300}})
 def test_any_scenario_loads_or_is_refused_naming_its_key(data):
     """A mapping either builds a scenario (which then runs, or is refused by the
     simulator with a flexarm error) or is refused with a ScenarioError naming a

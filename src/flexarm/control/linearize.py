@@ -296,6 +296,12 @@ def linearize(
         angles = check_array(theta, "theta", owner, shape=(n_links,))
     q0 = rest_state(arm, angles)
     mass = np.asarray(arm.mass_matrix(q0).real, dtype=float)
+    if not np.all(np.isfinite(mass)) or np.linalg.cond(mass) > 1.0 / np.finfo(float).eps:
+        raise InvalidValueError(
+            f"The 'arm' parameter of {owner} has a mass matrix singular to working precision "
+            f"at theta = {angles.tolist()} rad: its masses and inertias span more orders of "
+            "magnitude than float64 resolves."
+        )
     a = np.zeros((2 * n, 2 * n))
     a[:n, n:] = np.eye(n)
     a[n:, :n] = -np.linalg.solve(mass, arm.stiffness_matrix)

@@ -155,7 +155,8 @@ def _piecewise_numpy(t: _F, knot_t: _F, knot_p: _F, quintic: bool) -> _Triple:
         dds = np.zeros_like(tau)
     pos = knot_p[i] + s[:, None] * delta
     vel = np.where(moving, (ds / span)[:, None] * delta, 0.0)
-    acc = np.where(moving, (dds / span**2)[:, None] * delta, 0.0)
+    with np.errstate(over="ignore"):  # a side of ~1e154 s or more: no acceleration, as compiled
+        acc = np.where(moving, (dds / span**2)[:, None] * delta, 0.0)
     return pos, vel, acc
 
 

@@ -520,8 +520,15 @@ def _simulation(
     duration = float(trajectory.duration) if settings.duration is None else settings.duration
     settings = dataclasses.replace(settings, duration=duration)
     if round(duration / settings.dt) < 1:
+        # the key that set the duration: the simulation's, or the trajectory's own length
+        if "duration" in t:
+            key = "simulation.duration"
+        elif isinstance(data.get("trajectory"), Mapping) and data["trajectory"]:
+            key = "trajectory"  # the duration is the trajectory's length
+        else:
+            key = "simulation.dt"
         r.fail(
-            "simulation.duration" if "duration" in t else "simulation.dt",
+            key,
             f"the duration ({duration} s) must cover at least one control period ({settings.dt} s)",
         )
     limit = settings.torque_limit
