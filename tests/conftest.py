@@ -1,10 +1,20 @@
-"""Checks shared by the tests of figures (``test_figures.py``, ``test_report.py``)."""
+"""The Hypothesis profiles, and checks shared by the tests of figures
+(``test_figures.py``, ``test_report.py``)."""
 
 from __future__ import annotations
 
+import os
 import re
 
 import pytest
+from hypothesis import settings
+
+# "ci" (the default): the same examples on every run, so a run fails only for a change
+# (what a fresh random search found once is kept as an explicit @example). "explore":
+# a new random search each run, to look for more: HYPOTHESIS_PROFILE=explore pytest ...
+settings.register_profile("ci", derandomize=True)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 UNIT = re.compile(r"^\S.* \([^()]+\)$")  # "quantity (unit)"; "(-)" when dimensionless
 SMALLEST_FONT = 6.0  # points: the least a printed figure may carry

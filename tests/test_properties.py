@@ -101,6 +101,7 @@ CONSTRUCTORS = {
 @pytest.mark.parametrize("name", sorted(CONSTRUCTORS))
 @SLOW
 @given(value=ANYTHING)
+@example(value=2.2034940565285207e307)  # found on a fresh database: a tip mass overflowed
 def test_constructors_validate_or_name_the_parameter(name, value):
     build, names = CONSTRUCTORS[name]
     try:

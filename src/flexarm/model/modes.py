@@ -71,12 +71,18 @@ from .._validation import (
 from ..errors import InvalidValueError
 
 __all__ = [
+    "MAX_TIP_RATIO",
     "NORMALIZATIONS",
     "BeamModes",
     "cantilever_roots",
     "clamped_mass_roots",
     "frequency_function",
 ]
+
+MAX_TIP_RATIO = 1e12
+"""The largest tip mass over ``rho L`` (and tip inertia over ``rho L**3``) the modes
+take (dimensionless): far beyond any physical arm, and the scaled frequency equation's
+``mu j lam**4`` stays a float64 number."""
 
 NORMALIZATIONS = ("mass", "amplitude", "tip")
 
@@ -164,6 +170,12 @@ def clamped_mass_roots(
     n = check_int(n, "n", owner, minimum=0)
     mu = check_real(mass_ratio, "mass_ratio", owner, nonnegative=True)
     jr = check_real(inertia_ratio, "inertia_ratio", owner, nonnegative=True)
+    for name, ratio in (("mass_ratio", mu), ("inertia_ratio", jr)):
+        if ratio > MAX_TIP_RATIO:
+            raise InvalidValueError(
+                f"The '{name}' parameter of {owner} must be at most {MAX_TIP_RATIO:g} (beyond "
+                f"it the frequency equation overflows float64). Got {ratio!r} instead."
+            )
     if n == 0:
         return np.zeros(0)
 
@@ -340,6 +352,16 @@ class BeamModes:
         check_option(self.normalization, "normalization", owner, NORMALIZATIONS)
         set_(self, "amplitude", check_real(self.amplitude, "amplitude", owner, positive=True))
         _check_scales(self.length, self.flexural_rigidity, self.linear_density, owner)
+        for name, ratio, of in (
+            ("tip_mass", self.mass_ratio, "the link's mass rho L"),
+            ("tip_inertia", self.inertia_ratio, "rho L**3"),
+        ):
+            if not ratio <= MAX_TIP_RATIO:
+                raise InvalidValueError(
+                    f"The '{name}' parameter of {owner} must be at most {MAX_TIP_RATIO:g} times "
+                    f"{of} (beyond it the frequency equation overflows float64). "
+                    f"Got {getattr(self, name)!r} instead."
+                )
         # the quadrature evaluates every mode at ~2 pi n points: refuse what cannot fit
         n = self.n_modes
         npts = 64 + 2 * math.ceil(math.pi * (n + 1))
