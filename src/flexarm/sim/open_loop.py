@@ -42,6 +42,7 @@ __all__ = [
     "INTERPOLATIONS",
     "TORQUE_SIGNATURE",
     "OpenLoopState",
+    "open_loop_result",
     "run_open_loop",
     "simulate_open_loop",
     "wrap_torque_function",
@@ -341,18 +342,54 @@ def simulate_open_loop(
 
     start = time.perf_counter()
     status, k_end = run_in_chunks(chunk, k_rows, k_rows * substeps * n, progress)
+    return open_loop_result(
+        arm,
+        grid,
+        q,
+        dq,
+        tau,
+        diverged=status != OK,
+        last_row=k_end,
+        head={
+            "controller": "open loop",
+            "torque": kind,
+            "interpolation": interpolation if kind == "samples" else "exact",
+        },
+        dt=dt,
+        substeps=substeps,
+        wall_time_s=time.perf_counter() - start,
+    )
+
+
+def open_loop_result(
+    arm: Plant,
+    grid: F64,
+    q: F64,
+    dq: F64,
+    tau: F64,
+    *,
+    diverged: bool,
+    last_row: int,
+    head: dict[str, JSONValue],
+    dt: float,
+    substeps: int,
+    wall_time_s: float,
+) -> SimulationResult:
+    """The result of a run without a controller's signals (no measurement, reference
+    or desired path) on the instants ``grid`` (s), rows ``q, dq`` of shape
+    ``(len(grid), n_dof)`` and ``tau`` of shape ``(len(grid), n_links)`` (N m); ``head``
+    opens its ``info`` (what drove the arm), the settings and ``wall_time_s`` follow."""
+    k_rows = grid.shape[0]
     info: dict[str, JSONValue] = {
-        "controller": "open loop",
-        "torque": kind,
-        "interpolation": interpolation if kind == "samples" else "exact",
+        **head,
         "dt_s": dt,
         "substeps": substeps,
         "t0_s": float(grid[0]),
         "duration_s": float(grid[-1] - grid[0]),
-        "n_links": n_links,
+        "n_links": arm.n_links,
         "n_modes": list(arm.n_modes),
         "flexible_joints": bool(arm.has_flexible_joints),
-        "wall_time_s": time.perf_counter() - start,
+        "wall_time_s": wall_time_s,
     }
     return assemble_result(
         arm,
@@ -363,7 +400,7 @@ def simulate_open_loop(
         measurement=np.zeros((k_rows, 0)),
         reference=np.zeros((k_rows, 0)),
         desired=np.full((k_rows, 2), np.nan),
-        diverged=status != OK,
-        last_row=k_end,
+        diverged=diverged,
+        last_row=last_row,
         info=info,
     )

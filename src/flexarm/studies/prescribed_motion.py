@@ -22,7 +22,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._compile import njit_runtime_free
-from .._io import JSONValue
 from .._validation import check_array, check_int, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arrays import ArmArrays, Workspace, make_workspace
@@ -30,7 +29,8 @@ from ..model.plant import Plant, check_plant
 from ..model.prescribed import free_range, prescribed_dynamics
 from ..sim.integrator import diverged
 from ..sim.loop import DIVERGED, OK
-from ..sim.results import SimulationResult, assemble_result
+from ..sim.open_loop import open_loop_result
+from ..sim.results import SimulationResult
 
 __all__ = ["JointMotion", "simulate_prescribed"]
 
@@ -243,27 +243,16 @@ def simulate_prescribed(
     status, k_end = _run(
         arm.arrays, table, dt, substeps, max_defl, q_state, dq_state, ws, scratch, tau_s, q, dq, tau
     )
-    info: dict[str, JSONValue] = {
-        "controller": "prescribed joint motion",
-        "dt_s": dt,
-        "substeps": substeps,
-        "t0_s": float(grid[0]),
-        "duration_s": float(grid[-1] - grid[0]),
-        "n_links": n_links,
-        "n_modes": list(arm.n_modes),
-        "flexible_joints": bool(arm.has_flexible_joints),
-        "wall_time_s": time.perf_counter() - start,
-    }
-    return assemble_result(
+    return open_loop_result(
         arm,
-        t=grid.copy(),
-        q=q,
-        dq=dq,
-        tau=tau,
-        measurement=np.zeros((k_rows, 0)),
-        reference=np.zeros((k_rows, 0)),
-        desired=np.full((k_rows, 2), np.nan),
+        grid,
+        q,
+        dq,
+        tau,
         diverged=status != OK,
         last_row=int(k_end),
-        info=info,
+        head={"controller": "prescribed joint motion"},
+        dt=dt,
+        substeps=substeps,
+        wall_time_s=time.perf_counter() - start,
     )
