@@ -49,8 +49,6 @@ from .prediction import check_record
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-    from .hammerstein import HammersteinIdentifier
-
 __all__ = ["Bands", "bootstrap_bands", "circular_blocks"]
 
 F64 = NDArray[np.float64]
@@ -154,7 +152,7 @@ def draw_impulse_band(ax: Any, bands: Bands) -> None:
     ax.fill_between(k, bands.impulse_low, bands.impulse_high, alpha=0.3, lw=0, label=label)
 
 
-def _replicate(est: HammersteinIdentifier, u: F64, y: F64) -> tuple[F64, F64, F64] | None:
+def _replicate(est: Any, u: F64, y: F64) -> tuple[F64, F64, F64] | None:
     """``(grid, phi, impulse)`` of one resampled record by the fitted path and structure."""
     p = est._params
     if est.method_ == "white":
