@@ -64,7 +64,7 @@ from .arrays import (
     Workspace,
     make_workspace,
 )
-from .dynamics_foreshortening import link_foreshortening
+from .dynamics_foreshortening import link_foreshortening, link_sums
 from .dynamics_points import point_kinematics
 from .dynamics_recursive import _accelerations_recursive
 from .dynamics_two_links import (
@@ -205,20 +205,7 @@ def _assemble_local(q: F64, dq: F64, model: ArmArrays, ws: Workspace) -> None:  
         U[0, s] = 0.0
         U[1, s] = 0.0
         L, mass, cx, ia = lk[i, LEN], lk[i, MASS], lk[i, STATIC], lk[i, INERTIA]
-        vd = 0.0  # v . delta
-        vdd = 0.0  # v . delta_dot
-        e = 0.0  # tip deflection
-        ed = 0.0  # tip deflection rate
-        dmd = 0.0  # delta' Md delta
-        dmdd = 0.0  # delta' Md delta_dot
-        for g in range(a0, a1):
-            vd += v[g] * q[g]
-            vdd += v[g] * dq[g]
-            e += tdef[g] * q[g]
-            ed += tdef[g] * dq[g]
-            for c in range(a0, a1):
-                dmd += q[g] * md[g, c] * q[c]
-                dmdd += q[g] * md[g, c] * dq[c]
+        vd, vdd, e, ed, dmd, dmdd = link_sums(q, dq, v, tdef, md, a0, a1)
         ialpha = ia + dmd
         cxe = cx  # int rho (x - u) dx
         stiffening = has_shortening and a1 > a0

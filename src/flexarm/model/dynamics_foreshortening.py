@@ -1,4 +1,5 @@
-"""The foreshortening terms of one link, compiled: :func:`link_foreshortening`.
+"""One link's terms, compiled: its modal sums (:func:`link_sums`) and its
+foreshortening terms (:func:`link_foreshortening`).
 
 Called by the general kernel :func:`flexarm.model.dynamics.forward_dynamics_general`
 for every link with modes when the arm has geometric stiffening
@@ -24,9 +25,36 @@ from .arrays import (
     ArmArrays,
 )
 
-__all__ = ["link_foreshortening"]
+__all__ = ["link_foreshortening", "link_sums"]
 
 F64 = NDArray[np.float64]
+
+
+@njit_runtime_free(cache=True, nogil=True, inline="always")
+def link_sums(
+    q: F64, dq: F64, v: F64, tdef: F64, md: F64, a0: int, a1: int
+) -> tuple[float, float, float, float, float, float]:  # pragma: no cover - compiled
+    """The sums over one link's modes that every dynamics kernel needs.
+
+    Over the modes ``a0 <= g < a1``: ``v @ delta`` and ``v @ delta_dot`` (``v`` the
+    mass integrals), the tip deflection (m) and its rate, ``delta' Md delta`` and
+    ``delta' Md delta_dot``.
+    """
+    vd = 0.0
+    vdd = 0.0
+    e = 0.0
+    ed = 0.0
+    dmd = 0.0
+    dmdd = 0.0
+    for g in range(a0, a1):
+        vd += v[g] * q[g]
+        vdd += v[g] * dq[g]
+        e += tdef[g] * q[g]
+        ed += tdef[g] * dq[g]
+        for c in range(a0, a1):
+            dmd += q[g] * md[g, c] * q[c]
+            dmdd += q[g] * md[g, c] * dq[c]
+    return vd, vdd, e, ed, dmd, dmdd
 
 
 @njit_runtime_free(cache=True, nogil=True)

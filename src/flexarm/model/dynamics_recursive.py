@@ -70,7 +70,7 @@ from .arrays import (
     ArmArrays,
     Workspace,
 )
-from .dynamics_foreshortening import link_foreshortening
+from .dynamics_foreshortening import link_foreshortening, link_sums
 
 __all__ = ["accelerations_recursive"]
 
@@ -155,20 +155,7 @@ def _accelerations_recursive(
         ad = ch[i, CH_AD]
         ad2 = ad * ad
         L, mass, cx, ia = lk[i, LEN], lk[i, MASS], lk[i, STATIC], lk[i, INERTIA]
-        vd = 0.0  # v . delta
-        vdd = 0.0  # v . delta_dot
-        e = 0.0  # tip deflection
-        ed = 0.0  # tip deflection rate
-        dmd = 0.0  # delta' Md delta
-        dmdd = 0.0  # delta' Md delta_dot
-        for g in range(a0, a1):
-            vd += v[g] * q[g]
-            vdd += v[g] * dq[g]
-            e += tdef[g] * q[g]
-            ed += tdef[g] * dq[g]
-            for c in range(a0, a1):
-                dmd += q[g] * md[g, c] * q[c]
-                dmdd += q[g] * md[g, c] * dq[c]
+        vd, vdd, e, ed, dmd, dmdd = link_sums(q, dq, v, tdef, md, a0, a1)
         stiff = has_shortening and a1 > a0
         cxe = cx
         ialpha = ia + dmd
