@@ -4,10 +4,14 @@ user's own Numba loop."""
 
 from __future__ import annotations
 
+import ast
+from pathlib import Path
+
 import numba as nb
 import numpy as np
 import pytest
 
+import flexarm
 from flexarm import FlexibleArm
 from flexarm.errors import InvalidTypeError, InvalidValueError
 from flexarm.fuzzy import evaluate, evaluate_into, evaluate_many, paper_system, workspace_size
@@ -177,3 +181,43 @@ def test_the_fuzzy_kernels_check_their_scratch():
     assert evaluate(unpack_system(packed, 0), x) == value
     with pytest.raises(InvalidValueError, match="'p'"):
         unpack_system(packed[:10], 0)
+
+
+def _decorator_name(node: ast.expr) -> str:
+    target = node.func if isinstance(node, ast.Call) else node
+    return ast.unparse(target)
+
+
+def test_internal_compiled_code_calls_the_bare_kernels():
+    """flexarm's own compiled loops call the private kernels, not the public names:
+    inside compiled code a public name is an overload that is not inlined, and one
+    compiled with the refcount runtime pays an incref/decref pair for each of the
+    model's ~30 arrays at every call (the closed loop ran 1.5x slower that way).
+    The runtime-free overloads (``compiled_as(..., runtime_free=True)``) are calls
+    by design."""
+    root = Path(flexarm.__file__).parent
+    trees = {path: ast.parse(path.read_text()) for path in root.rglob("*.py")}
+    costly = set()
+    for tree in trees.values():
+        for node in ast.walk(tree):
+            if isinstance(node, ast.FunctionDef):
+                for dec in node.decorator_list:
+                    if (
+                        isinstance(dec, ast.Call)
+                        and _decorator_name(dec) == "compiled_as"
+                        and not any(k.arg == "runtime_free" for k in dec.keywords)
+                    ):
+                        costly.add(ast.unparse(dec.args[0]))
+    assert {"rk4_step", "diverged", "sense", "point_kinematics"} <= costly
+    offenders = []
+    for path, tree in trees.items():
+        for node in ast.walk(tree):
+            if not isinstance(node, ast.FunctionDef):
+                continue
+            names = {_decorator_name(d) for d in node.decorator_list}
+            if not names & {"nb.njit", "njit_runtime_free", "numba.njit", "njit"}:
+                continue
+            for call in ast.walk(node):
+                if isinstance(call, ast.Call) and ast.unparse(call.func) in costly:
+                    offenders.append(f"{path.relative_to(root)}:{call.lineno} {node.name}")
+    assert not offenders, offenders

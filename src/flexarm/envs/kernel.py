@@ -35,9 +35,10 @@ from numpy.typing import NDArray
 
 from .._compile import njit_runtime_free
 from ..model.arrays import ArmArrays, Workspace
-from ..model.dynamics import is_two_links_one_mode, point_kinematics
-from ..sim.integrator import diverged, rk4_step, rk4_step_two_links_one_mode
-from ..sim.loop import SensorArrays, sense
+from ..model.dynamics_points import _point_kinematics
+from ..model.dynamics_two_links import _is_two_links_one_mode
+from ..sim.integrator import _diverged, _rk4_step, _rk4_step_two_links_one_mode
+from ..sim.loop import SensorArrays, _sense
 
 __all__ = [
     "DIVERGED",
@@ -153,7 +154,7 @@ def _observe(
     raw = sig[0:n_ch]
     delayed = sig[n_ch : 2 * n_ch]
     point = sig[sig.shape[0] - 4 :]
-    sense(q, dq, model, sensor, raw)
+    _sense(q, dq, model, sensor, raw)
     n_buf = state.buffer.shape[1]
     if n_buf > 1:
         src = state.cursor[i] - (n_buf - 1)
@@ -195,7 +196,7 @@ def _observe(
         elif obs[c] > env.high[c]:
             obs[c] = env.high[c]
     last = n_links - 1
-    point_kinematics(q, dq, model, last, model.link[last, 0], env.tip_phi, point)
+    _point_kinematics(q, dq, model, last, model.link[last, 0], env.tip_phi, point)
     state.error[i] = math.hypot(point[0] - env.target[k, 0], point[1] - env.target[k, 1])
 
 
@@ -212,7 +213,7 @@ def reset_batch(
     for i in range(i0, i1):
         if not mask[i]:
             continue
-        sense(state.q[i], state.dq[i], model, env.sensor, raw)
+        _sense(state.q[i], state.dq[i], model, env.sensor, raw)
         for s in range(state.buffer.shape[1]):
             for c in range(n_ch):
                 state.buffer[i, s, c] = raw[c]
@@ -259,7 +260,7 @@ def step_batch(
     raw = sig[0:n_ch]
     x_new = sig[2 * n_ch : sig.shape[0] - 4]
     n_buf = state.buffer.shape[1]
-    two_links_one_mode = is_two_links_one_mode(model)
+    two_links_one_mode = _is_two_links_one_mode(model)
     for i in range(i0, i1):
         if not active[i]:
             continue
@@ -277,7 +278,7 @@ def step_batch(
         bad = False
         for _ in range(substeps):
             if order > 0:  # Padé filter: x <- Ad x + Bd u over this substep
-                sense(q, dq, model, sensor, raw)
+                _sense(q, dq, model, sensor, raw)
                 for c in range(n_ch):
                     for j in range(order):
                         acc = sensor.pade_bd[j] * raw[c]
@@ -287,16 +288,16 @@ def step_batch(
                     for j in range(order):
                         state.pade_x[i, c, j] = x_new[j]
             if two_links_one_mode:
-                rk4_step_two_links_one_mode(q, dq, tau, tau, tau, h, model)
+                _rk4_step_two_links_one_mode(q, dq, tau, tau, tau, h, model)
             else:
-                rk4_step(q, dq, tau, tau, tau, h, model, scratch.ws, scratch.stages)
+                _rk4_step(q, dq, tau, tau, tau, h, model, scratch.ws, scratch.stages)
             state.cursor[i] += 1
             if n_buf > 1:
-                sense(q, dq, model, sensor, raw)
+                _sense(q, dq, model, sensor, raw)
                 slot = state.cursor[i] % n_buf
                 for c in range(n_ch):
                     state.buffer[i, slot, c] = raw[c]
-            if diverged(q, dq, model, env.max_deflection):
+            if _diverged(q, dq, model, env.max_deflection):
                 bad = True
                 break
         state.k[i] += 1

@@ -37,9 +37,10 @@ from ..control.signals import (
 )
 from ..errors import InvalidValueError
 from ..model.arrays import ArmArrays, Workspace, make_workspace
-from ..model.dynamics import is_two_links_one_mode, point_kinematics
+from ..model.dynamics_points import _point_kinematics
+from ..model.dynamics_two_links import _is_two_links_one_mode
 from ..model.kernel_checks import check_model, check_vector, check_workspace
-from .integrator import diverged, rk4_step, rk4_step_two_links_one_mode
+from .integrator import _diverged, _rk4_step, _rk4_step_two_links_one_mode
 
 __all__ = [
     "DIVERGED",
@@ -264,7 +265,7 @@ def _sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) ->
         out[2] = vx
         out[3] = vy
     else:
-        point_kinematics(q, dq, model, link, sensor.distance[0], sensor.phi, out)
+        _point_kinematics(q, dq, model, link, sensor.distance[0], sensor.phi, out)
 
 
 def prime_delay_line(model: ArmArrays, sensor: SensorArrays, state: LoopState) -> None:
@@ -332,7 +333,7 @@ def _run(
     order = sensor.pade_ad.shape[0]
     has_noise = sensor.noise.shape[0] > 0
     joint_sensor = sensor.link[0] < 0
-    two_links_one_mode = is_two_links_one_mode(model)
+    two_links_one_mode = _is_two_links_one_mode(model)
     o_angle, o_rate = y_angles(n_links), y_rates(n_links)
     o_point, o_modes = y_point(n_links), y_modes(n_links)
     o_ff = r_feedforward(n_links)
@@ -444,16 +445,16 @@ def _run(
                     for j in range(order):
                         state.pade_x[c, j] = x_new[j]
             if two_links_one_mode:
-                rk4_step_two_links_one_mode(q, dq, tau, tau, tau, h, model)
+                _rk4_step_two_links_one_mode(q, dq, tau, tau, tau, h, model)
             else:
-                rk4_step(q, dq, tau, tau, tau, h, model, ws, state.scratch)
+                _rk4_step(q, dq, tau, tau, tau, h, model, ws, state.scratch)
             state.cursor[0] += 1
             if n_buf > 1:
                 _sense(q, dq, model, sensor, raw)
                 slot = state.cursor[0] % n_buf
                 for c in range(n_ch):
                     state.buffer[slot, c] = raw[c]
-            if diverged(q, dq, model, max_deflection):
+            if _diverged(q, dq, model, max_deflection):
                 return DIVERGED, k
     return OK, k1
 

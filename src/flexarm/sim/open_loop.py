@@ -31,10 +31,10 @@ from .._io import JSONValue
 from .._validation import check_array, check_int, check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arrays import ArmArrays, Workspace, make_workspace
-from ..model.dynamics import is_two_links_one_mode
+from ..model.dynamics_two_links import _is_two_links_one_mode
 from ..model.plant import Plant, check_plant
 from .driver import run_in_chunks
-from .integrator import diverged, rk4_step, rk4_step_two_links_one_mode
+from .integrator import _diverged, _rk4_step, _rk4_step_two_links_one_mode
 from .loop import DIVERGED, OK
 from .results import SimulationResult, assemble_result
 
@@ -148,7 +148,7 @@ def run_open_loop(
     n_rows = out_q.shape[0]
     h = dt / substeps
     q, dq, st = state.q, state.dq, state.stage_tau
-    two_links_one_mode = is_two_links_one_mode(model)
+    two_links_one_mode = _is_two_links_one_mode(model)
     for k in range(k0, k1):
         tk = t0 + k * dt
         for r in range(q.shape[0]):
@@ -164,10 +164,10 @@ def run_open_loop(
             for half in range(3):
                 _torque(mode, table, source, k, s, half, substeps, ts + 0.5 * half * h, st[half])
             if two_links_one_mode:
-                rk4_step_two_links_one_mode(q, dq, st[0], st[1], st[2], h, model)
+                _rk4_step_two_links_one_mode(q, dq, st[0], st[1], st[2], h, model)
             else:
-                rk4_step(q, dq, st[0], st[1], st[2], h, model, state.ws, state.scratch)
-            if diverged(q, dq, model, max_deflection):
+                _rk4_step(q, dq, st[0], st[1], st[2], h, model, state.ws, state.scratch)
+            if _diverged(q, dq, model, max_deflection):
                 return DIVERGED, k
     return OK, k1
 

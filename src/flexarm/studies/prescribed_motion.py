@@ -27,7 +27,7 @@ from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arrays import ArmArrays, Workspace, make_workspace
 from ..model.plant import Plant, check_plant
 from ..model.prescribed import free_range, prescribed_dynamics
-from ..sim.integrator import diverged
+from ..sim.integrator import _diverged
 from ..sim.loop import DIVERGED, OK
 from ..sim.open_loop import open_loop_result
 from ..sim.results import SimulationResult
@@ -116,7 +116,7 @@ def _run(
             for i in range(n_links):
                 q[a0 + i] = table[last, 0, i]
                 dq[a0 + i] = table[last, 1, i]
-            if diverged(q, dq, model, max_deflection):
+            if _diverged(q, dq, model, max_deflection):
                 return DIVERGED, k
     return OK, n_rows - 1
 
