@@ -83,9 +83,10 @@ WITHIN: dict[str, list[str]] = {
         "animation",  # before results: SimulationResult.animate calls it
         "results",
         "integrator",
+        "sensed",
+        "_reference_kernels",
         "loop",
         "driver",
-        "_reference_kernels",
         "references",
         "closed_loop",
         "batch",

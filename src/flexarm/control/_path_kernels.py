@@ -12,9 +12,46 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["piecewise_path"]
+__all__ = ["path_point", "piecewise_path"]
 
 F64 = NDArray[np.float64]
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def path_point(
+    tj: float, knot_t: F64, knot_p: F64, quintic: bool
+) -> tuple[float, float, float, float, float, float]:  # pragma: no cover - compiled
+    """The path at one time ``tj`` (s): ``(x, y, vx, vy, ax, ay)`` in m, m/s, m/s**2
+    (:func:`piecewise_path`'s formulas; the simulation loop streams it)."""
+    k = knot_t.shape[0]
+    i = int(np.searchsorted(knot_t, tj, side="right")) - 1
+    if i < 0:
+        i = 0
+    elif i > k - 2:
+        i = k - 2
+    t0 = knot_t[i]
+    span = knot_t[i + 1] - t0
+    tau = (tj - t0) / span
+    if tau < 0.0:
+        tau = 0.0
+    elif tau > 1.0:
+        tau = 1.0
+    if quintic:
+        s = tau**3 * (10.0 + tau * (-15.0 + 6.0 * tau))
+        ds = 30.0 * tau**2 * (1.0 - tau) ** 2
+        dds = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau)
+    else:
+        s = tau
+        ds = 1.0
+        dds = 0.0
+    moving = tj >= knot_t[0] and tj < knot_t[k - 1]
+    dx = knot_p[i + 1, 0] - knot_p[i, 0]
+    dy = knot_p[i + 1, 1] - knot_p[i, 1]
+    x = knot_p[i, 0] + s * dx
+    y = knot_p[i, 1] + s * dy
+    if moving:
+        return x, y, ds / span * dx, ds / span * dy, dds / span**2 * dx, dds / span**2 * dy
+    return x, y, 0.0, 0.0, 0.0, 0.0
 
 
 @nb.njit(cache=True, nogil=True)
@@ -27,38 +64,8 @@ def piecewise_path(
     (k >= 2); ``knot_p`` (k, 2), m; outputs (m, 2). Outside
     ``[knot_t[0], knot_t[-1])`` the path is at rest (velocity and acceleration 0).
     """
-    k = knot_t.shape[0]
-    first = knot_t[0]
-    last = knot_t[k - 1]
     for j in range(t.shape[0]):
-        tj = t[j]
-        i = np.searchsorted(knot_t, tj, side="right") - 1
-        if i < 0:
-            i = 0
-        elif i > k - 2:
-            i = k - 2
-        t0 = knot_t[i]
-        span = knot_t[i + 1] - t0
-        tau = (tj - t0) / span
-        if tau < 0.0:
-            tau = 0.0
-        elif tau > 1.0:
-            tau = 1.0
-        if quintic:
-            s = tau**3 * (10.0 + tau * (-15.0 + 6.0 * tau))
-            ds = 30.0 * tau**2 * (1.0 - tau) ** 2
-            dds = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau)
-        else:
-            s = tau
-            ds = 1.0
-            dds = 0.0
-        moving = tj >= first and tj < last
-        for c in range(2):
-            delta = knot_p[i + 1, c] - knot_p[i, c]
-            pos[j, c] = knot_p[i, c] + s * delta
-            if moving:
-                vel[j, c] = ds / span * delta
-                acc[j, c] = dds / span**2 * delta
-            else:
-                vel[j, c] = 0.0
-                acc[j, c] = 0.0
+        x, y, vx, vy, ax, ay = path_point(t[j], knot_t, knot_p, quintic)
+        pos[j, 0], pos[j, 1] = x, y
+        vel[j, 0], vel[j, 1] = vx, vy
+        acc[j, 0], acc[j, 1] = ax, ay

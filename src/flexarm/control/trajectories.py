@@ -49,6 +49,7 @@ __all__ = [
     "check_trajectory",
     "evaluation_times",
     "sample",
+    "straight_segments",
 ]
 
 DIRECTIONS = ("ccw", "cw")
@@ -294,8 +295,12 @@ class Square:
             In m, m/s and m/s**2.
         """
         tt, scalar = evaluation_times(t, f"{type(self).__name__}.evaluate")
+        knot_t, knot_p, quintic = self._segments()
+        return _shape_out(_piecewise(tt, knot_t, knot_p, quintic), scalar)
+
+    def _segments(self) -> tuple[_F, _F, bool]:
         knot_t, knot_p = self._knots()
-        return _shape_out(_piecewise(tt, knot_t, knot_p, self.timing == "quintic"), scalar)
+        return knot_t, knot_p, self.timing == "quintic"
 
 
 @dataclass(frozen=True)
@@ -438,9 +443,15 @@ class Line:
             In m, m/s and m/s**2.
         """
         tt, scalar = evaluation_times(t, f"{type(self).__name__}.evaluate")
-        knot_t = np.array([0.0, self.duration])
-        knot_p = np.array([self.start, self.end])
-        return _shape_out(_piecewise(tt, knot_t, knot_p, self.timing == "quintic"), scalar)
+        knot_t, knot_p, quintic = self._segments()
+        return _shape_out(_piecewise(tt, knot_t, knot_p, quintic), scalar)
+
+    def _segments(self) -> tuple[_F, _F, bool]:
+        return (
+            np.array([0.0, self.duration]),
+            np.array([self.start, self.end]),
+            self.timing == "quintic",
+        )
 
 
 @dataclass(frozen=True)
@@ -552,9 +563,11 @@ class Waypoints:
             In m, m/s and m/s**2.
         """
         tt, scalar = evaluation_times(t, f"{type(self).__name__}.evaluate")
-        knot_t = np.array(self.times)
-        knot_p = np.array(self.points)
-        return _shape_out(_piecewise(tt, knot_t, knot_p, self.interpolation == "quintic"), scalar)
+        knot_t, knot_p, quintic = self._segments()
+        return _shape_out(_piecewise(tt, knot_t, knot_p, quintic), scalar)
+
+    def _segments(self) -> tuple[_F, _F, bool]:
+        return np.array(self.times), np.array(self.points), self.interpolation == "quintic"
 
 
 # ------------------------------------------------------------------ consumers
@@ -591,3 +604,17 @@ def sample(trajectory: Trajectory, t: ArrayLike) -> _F:
     check_trajectory(trajectory, "sample")
     pos, vel, acc = trajectory.evaluate(np.atleast_1d(np.asarray(t, dtype=float)))
     return np.column_stack([pos, vel, acc])
+
+
+def straight_segments(trajectory: object) -> tuple[_F, _F, bool] | None:
+    """A path of this module made of straight segments as knots: times (k,) in s,
+    points (k, 2) in m, and whether each segment has quintic timing; None for any
+    other path (a circle, a subclass, a user's own).
+
+    What the simulation loop needs to compute the path instant by instant itself
+    (a compiled twin of the formulas of ``evaluate``).
+    """
+    if type(trajectory) in (Square, Line, PointToPoint, Waypoints):
+        segments: tuple[_F, _F, bool] = trajectory._segments()  # type: ignore[attr-defined]
+        return segments
+    return None

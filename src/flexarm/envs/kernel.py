@@ -38,7 +38,7 @@ from ..model.arrays import ArmArrays, Workspace
 from ..model.dynamics_points import _point_kinematics
 from ..model.dynamics_two_links import _is_two_links_one_mode
 from ..sim.integrator import _diverged, _rk4_step, _rk4_step_two_links_one_mode
-from ..sim.loop import SensorArrays, _sense
+from ..sim.sensed import SensorArrays, _sense
 
 __all__ = [
     "DIVERGED",

@@ -41,8 +41,16 @@ from ..model.kinematics import lever_lengths
 from ..model.plant import Plant, check_plant
 from ..sensing.delays import DelayModel, discretize, pade_state_space
 from ..sensing.sensors import Sensor, check_sensor
+from ._reference_kernels import OK, ReferenceStream, no_stream, stream_rows
 from .driver import LoopOutputs, StopFlag, run_in_chunks, run_scipy
-from .loop import SensorArrays, loop_state, prime_delay_line, run, sensor_arrays
+from .loop import (
+    REFERENCE_FAILED,
+    SensorArrays,
+    loop_state,
+    prime_delay_line,
+    run,
+    sensor_arrays,
+)
 from .references import BLOCK, PathShaper, ReferencePipeline
 from .results import SimulationError, SimulationResult, assemble_result
 
@@ -237,7 +245,13 @@ def simulate(
         owner=_OWNER,
     )
     whole: tuple[F64, F64] | None = None
-    if n_rows <= _WHOLE_REFERENCE_ROWS or method == "scipy":
+    # a path of straight segments is computed in the loop, instant by instant, unless
+    # the law's design reads the run's reference
+    streams = method == "rk4" and not _designs_on_reference(controller)
+    stream = pipeline.stream() if streams else None
+    if stream is not None:
+        design_reference = _first_row(stream, pipeline, dt)
+    elif n_rows <= _WHOLE_REFERENCE_ROWS or method == "scipy":
         whole = pipeline.rows(0, n_rows)  # short runs: once, for the design and the loop
         design_reference = whole[0]
     else:  # long runs: block by block; a pass first checks the path and samples it
@@ -294,17 +308,23 @@ def simulate(
         "tau": np.empty((n_out, N)),
         "measurement": np.empty((n_out, ny)),
     }
+    # the loop records the tip where the arm gives its basis (else the assembly computes it)
+    basis = getattr(arm, "point_basis", None)
+    tip_phi = np.zeros(0) if basis is None else basis(N - 1, float(arm.link_lengths[-1]))
+    out["tip"] = np.empty((n_out if basis is not None and method == "rk4" else 0, 2))
     if whole is not None:
         out["reference"], out["desired"] = (a if every == 1 else a[kept] for a in whole)
     else:
-        out["reference"], out["desired"] = np.empty((n_out, pipeline.size)), np.empty((n_out, 2))
+        out["reference"], out["desired"] = np.zeros((n_out, pipeline.size)), np.empty((n_out, 2))
 
     # ------------------------------------------------------------ run
     start = time.perf_counter()
     if method == "rk4":
 
         def chunk(k0: int, k1: int) -> tuple[int, int]:
-            if whole is not None:
+            if stream is not None:
+                reference = design_reference[:0]  # not read: the loop computes it
+            elif whole is not None:
                 reference = whole[0][k0:k1]
             else:
                 reference, desired = pipeline.rows(k0, k1)
@@ -321,6 +341,7 @@ def simulate(
                 params,
                 sensed._replace(noise=noise),
                 reference,
+                no_stream() if stream is None else stream,
                 dt,
                 substeps,
                 limit,
@@ -334,7 +355,13 @@ def simulate(
                 out["dq"][first:],
                 out["tau"][first:],
                 out["measurement"][first:],
+                out["reference"][first:],
+                out["desired"][first:],
+                tip_phi,
+                out["tip"][first:],
             )
+            if status == REFERENCE_FAILED:
+                pipeline.raise_at(k)  # the pipeline's own message for that instant
             return int(status), int(k)
 
         status, k_end = run_in_chunks(
@@ -342,7 +369,7 @@ def simulate(
             n_rows,
             n_rows * substeps * n,
             progress,
-            block=None if whole is not None and stop is None else BLOCK,
+            block=None if n_rows <= _WHOLE_REFERENCE_ROWS and stop is None else BLOCK,
             stop=stop,
         )
     else:
@@ -390,6 +417,7 @@ def simulate(
         measurement=out["measurement"],
         reference=out["reference"],
         desired=out["desired"],
+        tip=out["tip"] if out["tip"].shape[0] else None,
         diverged=status != 0,
         last_row=min(last_row, n_out - 1),
         info=info,
@@ -408,6 +436,21 @@ def recorded_instants(k0: int, k1: int, n_steps: int, every: int) -> NDArray[np.
     if k0 <= n_steps < k1 and n_steps % every:
         kept = np.append(kept, np.int64(n_steps))
     return kept
+
+
+def _designs_on_reference(controller: Controller) -> bool:
+    """Whether ``controller``'s design may read the run's reference (it overrides
+    :meth:`~flexarm.control.controllers.Controller.design`)."""
+    return type(controller).design is not Controller.design
+
+
+def _first_row(stream: ReferenceStream, pipeline: ReferencePipeline, dt: float) -> F64:
+    """The streamed reference's first row, shape (1, size) (or the pipeline's error)."""
+    first, desired = np.zeros((1, pipeline.size)), np.empty((1, 2))
+    status, k, _ = stream_rows(stream, np.zeros(1, dtype=np.int64), dt, first, desired)
+    if status != OK:
+        pipeline.raise_at(k)
+    return first
 
 
 def _sampled_reference(pipeline: ReferencePipeline, n_rows: int) -> F64:

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from ..errors import Cancelled, InvalidValueError
 from ..model.plant import Plant
+from ._reference_kernels import no_stream
 from .loop import DIVERGED, OK, LoopState, SensorArrays, run
 
 __all__ = ["LoopOutputs", "StopFlag", "run_in_chunks", "run_scipy"]
@@ -138,6 +139,7 @@ def run_scipy(
     # forms the measurement and the torque exactly as the fixed-step path does (its
     # own RK4 step lands in the copy and is discarded); solve_ivp then integrates
     # the plant over the period under that held torque.
+    nowhere = np.zeros((0, 0))
     for k in range(n_rows):
         st = state._replace(q=q.copy(), dq=dq.copy())
         last = k == n_rows - 1
@@ -147,6 +149,7 @@ def run_scipy(
             params,
             sensor,
             reference[k : k + 1],
+            no_stream(),
             dt,
             1,
             limit,
@@ -160,6 +163,10 @@ def run_scipy(
             out["dq"][k:],
             out["tau"][k:],
             out["measurement"][k:],
+            nowhere,  # the streamed reference's outputs: not streamed here
+            nowhere,
+            np.zeros(0),  # no tip recorded here (assemble_result computes it)
+            nowhere,
         )
         if last:
             return OK, k

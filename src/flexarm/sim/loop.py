@@ -20,12 +20,11 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import numba as nb
 import numpy as np
 from numba.core.ccallback import CFunc
 from numpy.typing import NDArray
 
-from .._compile import compiled_as, njit_runtime_free
+from .._compile import njit_runtime_free
 from ..control.signals import (
     measurement_size,
     r_feedforward,
@@ -36,15 +35,18 @@ from ..control.signals import (
     y_rates,
 )
 from ..errors import InvalidValueError
-from ..model.arrays import ArmArrays, Workspace, make_workspace
-from ..model.dynamics_points import _point_kinematics
+from ..model.arrays import LEN, ArmArrays, Workspace, make_workspace
+from ..model.dynamics_points import _point_state
 from ..model.dynamics_two_links import _is_two_links_one_mode
 from ..model.kernel_checks import check_model, check_vector, check_workspace
+from ._reference_kernels import ReferenceStream, stream_row
 from .integrator import _diverged, _rk4_step, _rk4_step_two_links_one_mode
+from .sensed import SensorArrays, _collocated, _sense, check_sensor_arrays, sense, sensor_arrays
 
 __all__ = [
     "DIVERGED",
     "OK",
+    "REFERENCE_FAILED",
     "LoopState",
     "SensorArrays",
     "loop_state",
@@ -57,121 +59,7 @@ __all__ = [
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 
-OK, DIVERGED = 0, 1
-
-
-class SensorArrays(NamedTuple):
-    """The sensor as plain arrays (build with :func:`sensor_arrays`).
-
-    Attributes
-    ----------
-    link : int64 (1,)
-        Link of the sensed point, -1 for the joint encoders.
-    rigid : int64 (1,)
-        1: the point is the rigid kinematics of the encoder angles (the paper's
-        sensor model), 0: the deflected point.
-    distance : (1,)
-        Distance of the point along its link, m.
-    phi : (n_modes of link,)
-        Mode shapes at the point (then, with geometric stiffening, the link's
-        shortening matrix there: FlexibleArm.point_basis).
-    levers : (n_links,)
-        Lever lengths of the rigid kinematics of the encoder angles (the link
-        lengths for the joint encoders, the point's for the paper's model), m.
-    delay_steps : int64 (1,)
-        Exact delay in substeps (0: none unless Padé).
-    pade_ad, pade_bd, pade_cd, pade_dd : (p, p), (p,), (p,), (1,)
-        Discrete Padé filter of order p; p = 0 for no Padé.
-    noise : (n_steps + 1, n_channels)
-        Additive noise per control instant, or (0, n_channels).
-    resolution : (n_channels,)
-        Quantisation steps (0: none).
-    """
-
-    link: I64
-    rigid: I64
-    distance: F64
-    phi: F64
-    levers: F64
-    delay_steps: I64
-    pade_ad: F64
-    pade_bd: F64
-    pade_cd: F64
-    pade_dd: F64
-    noise: F64
-    resolution: F64
-
-
-def sensor_arrays(
-    *,
-    link: int,
-    rigid: bool,
-    distance: float,
-    phi: F64,
-    levers: F64,
-    delay_steps: int,
-    pade: tuple[F64, F64, F64, F64] | None,
-    noise: F64,
-    resolution: F64,
-) -> SensorArrays:
-    """The one way to build :class:`SensorArrays`: by keyword, shapes checked.
-
-    Parameters
-    ----------
-    link : int
-        Link of the sensed point (0-based), or -1 for the joint encoders.
-    rigid : bool
-        The point is the rigid kinematics of the encoder angles (``levers``).
-    distance : float
-        Distance of the point along its link, m (0 for the encoders).
-    phi : ndarray, shape (n_modes of link,) or (n_modes + n_modes**2,)
-        Mode shapes at the point (empty for the encoders).
-    levers : ndarray, shape (n_links,)
-        Lever lengths of the rigid kinematics of the encoder angles, m.
-    delay_steps : int
-        Exact transport delay in substeps (>= 0).
-    pade : tuple of ndarray, optional
-        Discrete Padé filter ``(Ad (p, p), Bd (p,), Cd (p,), Dd (1,))``.
-    noise : ndarray, shape (n_rows, n_channels) or (0, n_channels)
-        Additive noise per control instant.
-    resolution : ndarray, shape (n_channels,)
-        Quantisation steps (0: none).
-    """
-    n_ch = 4 if link >= 0 else 2 * int(np.asarray(levers).shape[0])
-    ad, bd, cd, dd = (
-        pade if pade is not None else (np.zeros((0, 0)), np.zeros(0), np.zeros(0), np.zeros(1))
-    )
-    out = SensorArrays(
-        link=np.array([link], dtype=np.int64),
-        rigid=np.array([int(bool(rigid))], dtype=np.int64),
-        distance=np.array([distance], dtype=np.float64),
-        phi=np.ascontiguousarray(phi, dtype=np.float64),
-        levers=np.ascontiguousarray(levers, dtype=np.float64),
-        delay_steps=np.array([delay_steps], dtype=np.int64),
-        pade_ad=np.ascontiguousarray(ad, dtype=np.float64),
-        pade_bd=np.ascontiguousarray(np.ravel(bd), dtype=np.float64),
-        pade_cd=np.ascontiguousarray(np.ravel(cd), dtype=np.float64),
-        pade_dd=np.ascontiguousarray(np.ravel(dd), dtype=np.float64),
-        noise=np.ascontiguousarray(noise, dtype=np.float64),
-        resolution=np.ascontiguousarray(resolution, dtype=np.float64),
-    )
-    p = out.pade_ad.shape[0]
-    checks = {
-        "pade": out.pade_ad.shape == (p, p)
-        and out.pade_bd.shape == (p,)
-        and out.pade_cd.shape == (p,)
-        and out.pade_dd.shape == (1,),
-        "noise": out.noise.ndim == 2 and out.noise.shape[1] == n_ch,
-        "resolution": out.resolution.shape == (n_ch,),
-        "delay_steps": delay_steps >= 0,
-    }
-    for name, ok in checks.items():
-        if not ok:
-            raise InvalidValueError(
-                f"The '{name}' parameter of sensor_arrays does not fit a sensor with "
-                f"{n_ch} channels and a Padé filter of order {p}."
-            )
-    return out
+OK, DIVERGED, REFERENCE_FAILED = 0, 1, 2
 
 
 class LoopState(NamedTuple):
@@ -188,6 +76,8 @@ class LoopState(NamedTuple):
     scratch: F64  # (6, n) RK4 stages
     ws: Workspace  # dynamics scratch
     signals: F64  # (2 n_channels + n_y + max(p, 1),) signal scratch
+    reference: F64  # (reference_size,) a streamed reference vector (feedforward 0)
+    desired: F64  # (2,) a streamed desired point
 
 
 def loop_state(
@@ -215,57 +105,9 @@ def loop_state(
         scratch=np.zeros((6, n)),
         ws=make_workspace(n),
         signals=np.zeros(2 * n_ch + n_y + max(order, 1)),
+        reference=np.zeros(reference_size(n_links)),
+        desired=np.zeros(2),
     )
-
-
-@nb.njit(cache=True, nogil=True, inline="always")
-def _collocated(q: F64, dq: F64, model: ArmArrays, i: int, n_links: int) -> tuple[float, float]:
-    """Encoder angle and rate of joint ``i``: the motor with flexible joints."""
-    if model.joint.shape[0] > 0:
-        m = model.mode_start[n_links] + i
-        return q[m], dq[m]
-    return q[i], dq[i]
-
-
-@nb.njit(cache=True, nogil=True, inline="always")
-def _sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> None:
-    """The raw (true, undelayed) sensed signal: the encoder angles then rates, or
-    the point's position then velocity (deflected, or the paper's rigid
-    kinematics of the encoder angles).
-
-    Inlined where :func:`run` calls it (the model's and the sensor's arrays would
-    otherwise be passed through a call at every control step).
-    """
-    n_links = model.link.shape[0]
-    link = sensor.link[0]
-    if link < 0:
-        for i in range(n_links):
-            a, r = _collocated(q, dq, model, i, n_links)
-            out[i] = a
-            out[n_links + i] = r
-    elif sensor.rigid[0]:
-        # the paper's sensor model: rigid kinematics of the encoder angles
-        px = 0.0
-        py = 0.0
-        vx = 0.0
-        vy = 0.0
-        phi = 0.0
-        phid = 0.0
-        for i in range(n_links):
-            a, r = _collocated(q, dq, model, i, n_links)
-            phi += a
-            phid += r
-            lever = sensor.levers[i]
-            px += lever * np.cos(phi)
-            py += lever * np.sin(phi)
-            vx -= lever * np.sin(phi) * phid
-            vy += lever * np.cos(phi) * phid
-        out[0] = px
-        out[1] = py
-        out[2] = vx
-        out[3] = vy
-    else:
-        _point_kinematics(q, dq, model, link, sensor.distance[0], sensor.phi, out)
 
 
 def prime_delay_line(model: ArmArrays, sensor: SensorArrays, state: LoopState) -> None:
@@ -287,6 +129,7 @@ def _run(
     params: F64,
     sensor: SensorArrays,
     reference: F64,
+    stream: ReferenceStream,
     dt: float,
     substeps: int,
     torque_limit: F64,
@@ -300,19 +143,30 @@ def _run(
     out_dq: F64,
     out_tau: F64,
     out_y: F64,
+    out_r: F64,
+    out_desired: F64,
+    tip_phi: F64,
+    out_tip: F64,
 ) -> tuple[int, int]:  # pragma: no cover - compiled
     """Advance the loop over control instants ``k0 <= k < k1`` of a run of
     ``n_steps`` periods (measure at each ``k``, then act and integrate to ``k + 1``
     unless ``k == n_steps``).
 
     ``reference`` and ``sensor.noise`` (if any) hold the rows of instants
-    ``k0 <= k < k1``: row ``k - k0``. The outputs record every ``every``-th instant
-    and the last one (``k % every == 0`` or ``k == n_steps``): instant ``k`` goes to
-    row ``ceil(k / every) - ceil(k0 / every)``.
+    ``k0 <= k < k1``: row ``k - k0``. With ``stream`` on, the reference is computed
+    here at each instant instead (``reference`` is not read) and recorded with the
+    desired point in ``out_r`` and ``out_desired`` (not written otherwise). With
+    rows in ``out_tip``, the end effector's position (deflected; ``tip_phi`` the
+    last link's basis at its tip, FlexibleArm.point_basis) is recorded there. The
+    outputs record every ``every``-th instant and the last one (``k % every == 0``
+    or ``k == n_steps``): instant ``k`` goes to row
+    ``ceil(k / every) - ceil(k0 / every)``.
 
     Returns ``(status, k)``: status 0 and ``k1`` when done, 1 and the last instant
     whose state was finite when the state diverged (non-finite, rates above 1e12,
-    or a link's tip deflection above ``max_deflection``).
+    or a link's tip deflection above ``max_deflection``), 2 and the instant whose
+    streamed reference failed (out of reach or singular: the pipeline's
+    ``rows`` at that instant says how).
     """
     n = state.q.shape[0]
     n_links = model.link.shape[0]
@@ -337,7 +191,15 @@ def _run(
     o_angle, o_rate = y_angles(n_links), y_rates(n_links)
     o_point, o_modes = y_point(n_links), y_modes(n_links)
     o_ff = r_feedforward(n_links)
+    streamed = stream.spec[0] != 0.0
+    record_tip = out_tip.shape[0] > 0
+    last_link = n_links - 1
+    tip_distance = model.link[last_link, LEN]
     for k in range(k0, k1):
+        if streamed:
+            code, _ = stream_row(stream, k * dt, state.reference, state.desired)
+            if code != OK:
+                return REFERENCE_FAILED, k
         # ---- measure: the delayed sensed signal, then noise and quantisation
         _sense(q, dq, model, sensor, raw)
         cur = state.cursor[0]
@@ -404,12 +266,21 @@ def _run(
                 out_dq[row, r] = dq[r]
             for c in range(y.shape[0]):
                 out_y[row, c] = y[c]
+            if record_tip:
+                px, py, _, _ = _point_state(q, q, model, last_link, tip_distance, tip_phi)
+                out_tip[row, 0] = px
+                out_tip[row, 1] = py
+            if streamed:
+                for c in range(state.reference.shape[0]):
+                    out_r[row, c] = state.reference[c]
+                out_desired[row, 0] = state.desired[0]
+                out_desired[row, 1] = state.desired[1]
         if k == n_steps:
             for i in range(n_links):
                 out_tau[row, i] = tau[i]
             return OK, k1
         # ---- act: control law, saturation, zero-order hold
-        rk = reference[k - k0]
+        rk = state.reference if streamed else reference[k - k0]
         control(
             k * dt,
             y.ctypes,
@@ -462,60 +333,13 @@ def _run(
 # ------------------------------------------------------------------ checked public faces
 # From Python, run and sense check every array they will index (a short output
 # would be written past its end); inside compiled code they are the kernels.
-def _check_sensor(sensor: SensorArrays, model: ArmArrays, owner: str) -> tuple[int, int]:
-    """``(n_channels, pade order)`` of ``sensor`` for ``model``."""
-    if not isinstance(sensor, SensorArrays):
-        raise InvalidValueError(
-            f"The 'sensor' parameter of {owner} must be a SensorArrays (sensor_arrays)."
-        )
-    n_links, _ = check_model(model, owner)
-    for name in ("link", "rigid", "delay_steps"):
-        check_vector(getattr(sensor, name), f"sensor.{name}", owner, (1,), dtype=np.int64)
-    check_vector(sensor.distance, "sensor.distance", owner, (1,))
-    link = int(sensor.link[0])
-    if not -1 <= link < n_links:
-        raise InvalidValueError(
-            f"The 'sensor.link' parameter of {owner} must be -1 (encoders) or a link of the "
-            f"model (< {n_links}). Got {link} instead."
-        )
-    n_ch = 2 * n_links if link < 0 else 4
-    if link >= 0:
-        modes = int(model.mode_start[link + 1] - model.mode_start[link])
-        if sensor.phi.shape not in ((modes,), (modes + modes * modes,)):
-            raise InvalidValueError(
-                f"The 'sensor.phi' parameter of {owner} must fit link {link}'s {modes} modes. "
-                f"Got shape {sensor.phi.shape} instead."
-            )
-    check_vector(sensor.phi, "sensor.phi", owner, sensor.phi.shape)
-    check_vector(sensor.levers, "sensor.levers", owner, (n_links,))
-    p = sensor.pade_ad.shape[0] if sensor.pade_ad.ndim == 2 else -1
-    check_vector(sensor.pade_ad, "sensor.pade_ad", owner, (p, p))
-    check_vector(sensor.pade_bd, "sensor.pade_bd", owner, (p,))
-    check_vector(sensor.pade_cd, "sensor.pade_cd", owner, (p,))
-    check_vector(sensor.pade_dd, "sensor.pade_dd", owner, (1,))
-    rows = sensor.noise.shape[0] if sensor.noise.ndim == 2 else -1
-    check_vector(sensor.noise, "sensor.noise", owner, (rows, n_ch))
-    check_vector(sensor.resolution, "sensor.resolution", owner, (n_ch,))
-    return n_ch, p
-
-
-def sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> None:
-    """The raw sensed signal (``_sense``), arguments checked."""
-    owner = "sense"
-    _, n = check_model(model, owner)
-    n_ch, _ = _check_sensor(sensor, model, owner)
-    check_vector(q, "q", owner, (n,))
-    check_vector(dq, "dq", owner, (n,))
-    check_vector(out, "out", owner, (n_ch,), writable=True)
-    _sense(q, dq, model, sensor, out)
-
-
 def run(
     model: ArmArrays,
     control: CFunc,
     params: F64,
     sensor: SensorArrays,
     reference: F64,
+    stream: ReferenceStream,
     dt: float,
     substeps: int,
     torque_limit: F64,
@@ -529,12 +353,16 @@ def run(
     out_dq: F64,
     out_tau: F64,
     out_y: F64,
+    out_r: F64,
+    out_desired: F64,
+    tip_phi: F64,
+    out_tip: F64,
 ) -> tuple[int, int]:
     """The compiled loop (``_run``: its docstring has the semantics) over
     ``k0 <= k < k1``, every array it will index checked first."""
     owner = "run"
     n_links, n = check_model(model, owner)
-    n_ch, p = _check_sensor(sensor, model, owner)
+    n_ch, p = check_sensor_arrays(sensor, model, owner)
     k0, k1, n_steps, every, substeps = (int(v) for v in (k0, k1, n_steps, every, substeps))
     if not (0 <= k0 <= k1 <= n_steps + 1 and every >= 1 and substeps >= 1 and dt > 0):
         raise InvalidValueError(
@@ -549,7 +377,9 @@ def run(
             f"The 'sensor.noise' parameter of {owner} must have a row per instant "
             f"({k1 - k0}). Got {sensor.noise.shape[0]} rows instead."
         )
-    _rows_at_least(reference, "reference", owner, acting, reference_size(n_links), False)
+    streamed = _check_stream(stream, n_links, owner)
+    if not streamed:
+        _rows_at_least(reference, "reference", owner, acting, reference_size(n_links), False)
     check_vector(torque_limit, "torque_limit", owner, (n_links,))
     check_vector(max_deflection, "max_deflection", owner, (n_links,))
     if not isinstance(state, LoopState):
@@ -568,6 +398,10 @@ def run(
     check_vector(
         state.signals, "state.signals", owner, (2 * n_ch + n_y + max(p, 1),), writable=True
     )
+    check_vector(
+        state.reference, "state.reference", owner, (reference_size(n_links),), writable=True
+    )
+    check_vector(state.desired, "state.desired", owner, (2,), writable=True)
     recorded = (
         (max(k1, k0) + every - 1) // every
         - (k0 + every - 1) // every
@@ -580,12 +414,25 @@ def run(
         ("out_y", out_y, n_y),
     ):
         _rows_at_least(out, name, owner, recorded, width, True)
+    if streamed:
+        _rows_at_least(out_r, "out_r", owner, recorded, reference_size(n_links), True)
+        _rows_at_least(out_desired, "out_desired", owner, recorded, 2, True)
+    check_vector(tip_phi, "tip_phi", owner, np.shape(tip_phi))
+    if not (isinstance(out_tip, np.ndarray) and out_tip.ndim == 2 and out_tip.shape[0] == 0):
+        modes = int(model.mode_start[n_links] - model.mode_start[n_links - 1])
+        if tip_phi.shape not in ((modes,), (modes + modes * modes,)):
+            raise InvalidValueError(
+                f"The 'tip_phi' parameter of {owner} must fit the last link's {modes} modes. "
+                f"Got shape {tip_phi.shape} instead."
+            )
+        _rows_at_least(out_tip, "out_tip", owner, recorded, 2, True)
     status, k = _run(
         model,
         control,
         params,
         sensor,
         reference,
+        stream,
         dt,
         substeps,
         torque_limit,
@@ -599,8 +446,32 @@ def run(
         out_dq,
         out_tau,
         out_y,
+        out_r,
+        out_desired,
+        tip_phi,
+        out_tip,
     )
     return int(status), int(k)
+
+
+def _check_stream(stream: ReferenceStream, n_links: int, owner: str) -> bool:
+    """Whether ``stream`` is on (then for two links, with knots it can index)."""
+    if not isinstance(stream, ReferenceStream):
+        raise InvalidValueError(
+            f"The 'stream' parameter of {owner} must be a ReferenceStream (reference_stream "
+            "or no_stream)."
+        )
+    check_vector(stream.spec, "stream.spec", owner, (7,))
+    k = stream.knot_t.shape[0] if stream.knot_t.ndim == 1 else -1
+    check_vector(stream.knot_t, "stream.knot_t", owner, (k,))
+    check_vector(stream.knot_p, "stream.knot_p", owner, (k, 2))
+    on = bool(stream.spec[0] != 0.0)
+    if on and (n_links != 2 or k < 2):
+        raise InvalidValueError(
+            f"The 'stream' parameter of {owner} must be off or stream a two-link arm's "
+            f"reference along at least 2 knots. Got {n_links} links and {k} knots instead."
+        )
+    return on
 
 
 def _rows_at_least(arr: F64, name: str, owner: str, rows: int, width: int, writable: bool) -> None:
@@ -610,8 +481,3 @@ def _rows_at_least(arr: F64, name: str, owner: str, rows: int, width: int, writa
             f"Got shape {getattr(arr, 'shape', None)} instead."
         )
     check_vector(arr, name, owner, (arr.shape[0], width), writable=writable)
-
-
-@compiled_as(sense)
-def _sense_compiled(q, dq, model, sensor, out):  # type: ignore[no-untyped-def]
-    return lambda q, dq, model, sensor, out: _sense(q, dq, model, sensor, out)

@@ -24,7 +24,7 @@ undelayed), which the pipeline returns beside ``r``.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import NamedTuple, Protocol
+from typing import TYPE_CHECKING, NamedTuple, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -40,9 +40,18 @@ from ..control.signals import (
     r_velocity,
     reference_size,
 )
-from ..control.trajectories import ELBOWS, Trajectory, check_trajectory, evaluation_times
+from ..control.trajectories import (
+    ELBOWS,
+    Trajectory,
+    check_trajectory,
+    evaluation_times,
+    straight_segments,
+)
 from ..errors import InvalidValueError
 from ..model.kinematics import lever_lengths, rigid_point
+
+if TYPE_CHECKING:
+    from ._reference_kernels import ReferenceStream
 
 __all__ = [
     "BLOCK",
@@ -346,12 +355,52 @@ class ReferencePipeline:
         self._cache: tuple[int, F64, F64] | None = None
         self._path_start = np.zeros((1, 2))
         self.initial_angles: F64 | None = None
+        self._shaped = shaper is not None
         if n_links == 2:
-            _, desired = self._block(0)
-            start = self._path_start if self._smoothed else desired[:1]  # the law's first point
+            if self._smoothed:  # the law's first point: the smoothed path's
+                self._block(0)
+                start = self._path_start
+            else:  # the desired path's first point
+                start = np.asarray(trajectory.evaluate(np.zeros(1))[0], dtype=float)
             theta = np.empty((1, 2))
             self._joint_path(start, np.zeros((1, 2)), np.zeros((1, 2)), theta, 0)
             self.initial_angles = theta[0]
+
+    def stream(self) -> ReferenceStream | None:
+        """The pipeline as the plain arrays (a ``ReferenceStream``) from which the
+        simulation loop computes it instant by instant, with the same numbers as
+        :meth:`rows`; None where it cannot (a path not of straight segments,
+        shaping, smoothing, a sensed point short of the end effector, feedforward, or
+        an arm without two links)."""
+        from ._reference_kernels import reference_stream
+
+        segments = straight_segments(self._trajectory)
+        if (
+            segments is None
+            or self._n_links != 2
+            or self._shaped
+            or self._smoothed
+            or self._levers is not None
+            or self._feedforward is not None
+        ):
+            return None
+        knot_t, knot_p, quintic = segments
+        l1, l2 = (float(v) for v in self._lengths)
+        return reference_stream(
+            knot_t,
+            knot_p,
+            quintic=quintic,
+            delay=self._delay,
+            lengths=(l1, l2),
+            sign=self._sign,
+            singularity_tol=self._tol,
+        )
+
+    def raise_at(self, k: int) -> None:
+        """Raise the error :meth:`rows` gives for instant ``k`` (a streamed reference
+        that failed there)."""
+        self.rows(k, k + 1)
+        raise AssertionError(f"the reference at instant {k} is valid")  # pragma: no cover
 
     def rows(self, k0: int, k1: int) -> tuple[F64, F64]:
         """``r`` (shape (k1 - k0, size)) and the desired path (shape (k1 - k0, 2), m)

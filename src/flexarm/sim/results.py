@@ -438,19 +438,25 @@ def assemble_result(
     diverged: bool,
     last_row: int,
     info: dict[str, JSONValue],
+    tip: F64 | None = None,
 ) -> SimulationResult:
     """The :class:`SimulationResult` of a run whose rows up to ``last_row`` were written.
 
     Rows after ``last_row`` become NaN; the tip follows from ``q`` where the state
-    is finite; ``info["status"]`` is set. A run that ``diverged`` raises
-    :class:`SimulationError` with the partial result attached.
+    is finite, unless the loop recorded it (``tip``, shape (K, 2), m: the rows up
+    to ``last_row`` written, the state finite there); ``info["status"]`` is set.
+    A run that ``diverged`` raises :class:`SimulationError` with the partial
+    result attached.
     """
     for series in (q, dq, tau, measurement):
         series[last_row + 1 :] = np.nan
-    tip = np.full((t.shape[0], 2), np.nan)
-    reached = q[: last_row + 1]
-    done = np.all(np.isfinite(reached), axis=1)
-    tip[: last_row + 1][done] = arm.tip_position(reached[done])
+    if tip is None:
+        tip = np.full((t.shape[0], 2), np.nan)
+        reached = q[: last_row + 1]
+        done = np.all(np.isfinite(reached), axis=1)
+        tip[: last_row + 1][done] = arm.tip_position(reached[done])
+    else:
+        tip[last_row + 1 :] = np.nan
     info["status"] = "diverged" if diverged else "ok"
     result = SimulationResult(
         t=t,
