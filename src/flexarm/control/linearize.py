@@ -67,30 +67,38 @@ _OWNER = "closed_loop_matrix"
 
 def measure(arm: FlexibleArm, sensor: Sensor, q: F64, dq: F64, h: float = 1e-5) -> F64:
     """The measurement ``y`` (:mod:`flexarm.control.signals`) of the state, undelayed
-    (``h``: the difference step, rad or modal units, of the point's velocity)."""
+    (``h``: the difference step, rad or modal units, of the point's velocity).
+
+    ``q`` and ``dq`` of shape ``(n_dof,)`` give ``y`` of shape ``(n_y,)``; of shape
+    ``(m, n_dof)`` (states as rows), ``y`` of shape ``(m, n_y)`` in one pass.
+    """
+    single = np.ndim(q) == 1
+    q, dq = np.atleast_2d(q), np.atleast_2d(dq)
     n_links = arm.n_links
     ya, yr, yp, yv, ym = (f(n_links) for f in (y_angles, y_rates, y_point, y_point_rate, y_modes))
-    y = np.zeros(measurement_size(n_links, sum(arm.n_modes)))
+    y = np.zeros((q.shape[0], measurement_size(n_links, sum(arm.n_modes))))
     cols = arm.motor_slice if arm.has_flexible_joints else slice(0, n_links)
-    y[ya : ya + n_links], y[yr : yr + n_links] = q[cols], dq[cols]
+    y[:, ya : ya + n_links], y[:, yr : yr + n_links] = q[:, cols], dq[:, cols]
     link, distance, _ = sensor.resolve(arm)
     if link < 0 or sensor.model == "paper":  # rigid kinematics of the encoder angles
         levers = arm.link_lengths if link < 0 else lever_lengths(arm.link_lengths, link, distance)
-        pos, vel = rigid_point(levers, q[cols], dq[cols])
+        pos, vel = rigid_point(levers, q[:, cols], dq[:, cols])
         assert vel is not None
-        y[yp : yp + 2], y[yv : yv + 2] = pos, vel
+        y[:, yp : yp + 2], y[:, yv : yv + 2] = pos, vel
     else:  # the deflected point; its velocity is linear in dq (central difference)
 
         def point(x: F64) -> F64:
             return arm.point_position(x, link, distance)
 
-        y[yp : yp + 2] = point(q)
-        speed = float(np.linalg.norm(dq))
-        if speed > 0.0:
-            u = dq / speed
-            y[yv : yv + 2] = speed * (point(q + h * u) - point(q - h * u)) / (2 * h)
-    y[ym:] = q[n_links : n_links + sum(arm.n_modes)]
-    return y
+        y[:, yp : yp + 2] = point(q)
+        speed = np.linalg.norm(dq, axis=1)
+        moving = speed > 0.0
+        if np.any(moving):
+            v, u = speed[moving, None], dq[moving] / speed[moving, None]
+            qm = q[moving]
+            y[moving, yv : yv + 2] = v * (point(qm + h * u) - point(qm - h * u)) / (2 * h)
+    y[:, ym:] = q[:, n_links : n_links + sum(arm.n_modes)]
+    return y[0] if single else y
 
 
 def closed_loop_matrix(

@@ -25,7 +25,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
+from numba.core.ccallback import CFunc
 from numpy.typing import NDArray
 
 from ..errors import InvalidValueError
@@ -119,31 +121,50 @@ def _controller_jacobians(
     r0: F64,
 ) -> tuple[F64, F64, F64, F64]:
     """``(A_c, B_c, C_c, D_c)``: the law's next state and torque differentiated in
-    its state and measurement, by central differences."""
+    its state and measurement, by central differences (all the law's evaluations
+    in one compiled call)."""
     n_s, n_y = state.shape[0], y0.shape[0]
-
-    def law(y: F64, s: F64) -> tuple[F64, F64]:
-        s2 = s.copy()
-        tau = controller(0.0, y, r0, params, s2)
-        return tau, s2
-
-    tau0, _ = law(y0, state)
-    m = tau0.shape[0]
-    a_c, b_c = np.zeros((n_s, n_s)), np.zeros((n_s, n_y))
-    c_c, d_c = np.zeros((m, n_s)), np.zeros((m, n_y))
-    for j in range(n_y):
-        h = 1e-6 * max(1.0, abs(y0[j]))
-        e = np.zeros(n_y)
-        e[j] = h
-        (tp, sp), (tm, sm) = law(y0 + e, state), law(y0 - e, state)
-        d_c[:, j], b_c[:, j] = (tp - tm) / (2 * h), (sp - sm) / (2 * h)
-    for j in range(n_s):
-        h = 1e-6 * max(1.0, abs(state[j]))
-        e = np.zeros(n_s)
-        e[j] = h
-        (tp, sp), (tm, sm) = law(y0, state + e), law(y0, state - e)
-        c_c[:, j], a_c[:, j] = (tp - tm) / (2 * h), (sp - sm) / (2 * h)
+    hy = 1e-6 * np.maximum(1.0, np.abs(y0))
+    hs = 1e-6 * np.maximum(1.0, np.abs(state))
+    # rows: +h then -h along each measurement, then along each state
+    ys = np.tile(y0, (2 * (n_y + n_s), 1))
+    states = np.tile(state, (2 * (n_y + n_s), 1))
+    ys[:n_y] += np.diag(hy)
+    ys[n_y : 2 * n_y] -= np.diag(hy)
+    states[2 * n_y : 2 * n_y + n_s] += np.diag(hs)
+    states[2 * n_y + n_s :] -= np.diag(hs)
+    n_links = controller(0.0, y0, r0, params, state.copy()).shape[0]
+    taus = np.zeros((ys.shape[0], n_links))
+    _law_rows(controller.cfunc, ys, np.ascontiguousarray(r0, dtype=float), params, states, taus)
+    dy, ds = 2 * hy[:, None], 2 * hs[:, None]  # each row's step
+    d_c = ((taus[:n_y] - taus[n_y : 2 * n_y]) / dy).T
+    b_c = ((states[:n_y] - states[n_y : 2 * n_y]) / dy).T
+    c_c = ((taus[2 * n_y : 2 * n_y + n_s] - taus[2 * n_y + n_s :]) / ds).T
+    a_c = ((states[2 * n_y : 2 * n_y + n_s] - states[2 * n_y + n_s :]) / ds).T
     return a_c, b_c, c_c, d_c
+
+
+@nb.njit(cache=True, nogil=True)
+def _law_rows(
+    control: CFunc, ys: F64, r: F64, params: F64, states: F64, taus: F64
+) -> None:  # pragma: no cover - compiled
+    """The compiled law at ``t = 0`` on each row of ``ys`` with the state in the same
+    row of ``states`` (updated in place), torques into ``taus``."""
+    for j in range(ys.shape[0]):
+        y, s, tau = ys[j], states[j], taus[j]
+        control(
+            0.0,
+            y.ctypes,
+            y.shape[0],
+            r.ctypes,
+            r.shape[0],
+            params.ctypes,
+            params.shape[0],
+            s.ctypes,
+            s.shape[0],
+            tau.ctypes,
+            tau.shape[0],
+        )
 
 
 @dataclass(frozen=True)
@@ -198,15 +219,11 @@ def linear_loop(
     q0[: arm.n_links] = theta
     if arm.has_flexible_joints:
         q0[arm.motor_slice] = theta
-    y0 = measure(arm, sensor, q0, np.zeros(n), 1e-5)
-    c_y = np.zeros((y0.shape[0], 2 * n))
-    h = 1e-7
-    for j in range(2 * n):
-        x = np.zeros(2 * n)
-        x[j] = h
-        yp = measure(arm, sensor, q0 + x[:n], x[n:], 1e-5)
-        ym = measure(arm, sensor, q0 - x[:n], -x[n:], 1e-5)
-        c_y[:, j] = (yp - ym) / (2 * h)
+    h = 1e-7  # central differences: the state at rest, then +h and -h along each coordinate
+    steps = np.concatenate([np.zeros((1, 2 * n)), h * np.eye(2 * n), -h * np.eye(2 * n)])
+    ys = measure(arm, sensor, q0 + steps[:, :n], steps[:, n:], 1e-5)
+    y0 = ys[0]
+    c_y = ((ys[1 : 2 * n + 1] - ys[2 * n + 1 :]) / (2 * h)).T
     a_c, b_c, c_c, d_c = _controller_jacobians(controller, params, state, y0, reference)
     return LinearLoop(plant.A, plant.B, c_y, a_c, b_c, c_c, d_c)
 

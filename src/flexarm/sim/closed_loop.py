@@ -315,7 +315,7 @@ def simulate(
     if whole is not None:
         out["reference"], out["desired"] = (a if every == 1 else a[kept] for a in whole)
     else:
-        out["reference"], out["desired"] = np.zeros((n_out, pipeline.size)), np.empty((n_out, 2))
+        out["reference"], out["desired"] = np.empty((n_out, pipeline.size)), np.empty((n_out, 2))
 
     # ------------------------------------------------------------ run
     start = time.perf_counter()
@@ -410,7 +410,7 @@ def simulate(
     last_row = (k_end + every - 1) // every if status == 0 else k_end // every
     return assemble_result(
         arm,
-        t=kept.astype(np.float64) * dt,
+        t=np.multiply(kept, dt, dtype=np.float64),
         q=out["q"],
         dq=out["dq"],
         tau=out["tau"],
