@@ -121,7 +121,7 @@ def test_ctrl_c_is_one_line_exit_130_and_a_consistent_journal(capsys, small, tmp
 
 
 @pytest.mark.skipif(os.name != "posix", reason="POSIX signals")
-@pytest.mark.parametrize("how", [[], ["--processes"]], ids=["threads", "processes"])
+@pytest.mark.parametrize("how", [["--threads"], []], ids=["threads", "default"])
 def test_a_real_sigint_leaves_whole_lines_and_the_sweep_resumes(tmp_path, how):
     """SIGINT to the command while runs are under way: exit 130, one line on stderr,
     the journal's lines whole; the same sweep then does only the runs left."""
@@ -293,6 +293,7 @@ def test_a_missing_sweep_file(capsys, tmp_path):
         (["--scheduler", "nonsense://x"], "argument --scheduler: cannot connect"),
         (["--scheduler", "tcp://127.0.0.1:1"], "argument --scheduler: cannot connect"),
         (["--scheduler", "tcp://127.0.0.1:1", "--processes"], "argument --processes: not with"),
+        (["--processes", "--threads"], "argument --threads: not allowed with argument"),
     ],
 )
 def test_bad_options_are_one_line_status_2(capsys, small, tmp_path, extra, needle):

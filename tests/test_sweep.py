@@ -16,9 +16,10 @@ import pytest
 
 import flexarm
 from flexarm.errors import InvalidValueError
-from flexarm.sweeps import execute
+from flexarm.sweeps import driver, execute
 from flexarm.sweeps.distributions import Choice, Integers, LogUniform, Normal, Uniform, key_rng
 from flexarm.sweeps.driver import SweepInterrupted, sweep
+from flexarm.sweeps.execute import prefer_processes
 from flexarm.sweeps.journal import JOURNAL_FILE, Journal, read_journal
 from flexarm.sweeps.keys import KeyPathError, parse_key, run_id, with_changes
 from flexarm.sweeps.reader import SweepError, SweepTypeError
@@ -34,7 +35,8 @@ def spec_of(**sections):
 
 @pytest.fixture
 def counted(monkeypatch):
-    """Count the runs actually simulated (the function each pool thread calls)."""
+    """Count the runs actually simulated (the function each pool thread calls); the
+    count is kept in this process, so the sweeps run in threads."""
     calls = []
     real = execute.run_scenario
 
@@ -43,6 +45,7 @@ def counted(monkeypatch):
         return real(scenario)
 
     monkeypatch.setattr(execute, "run_scenario", run)
+    monkeypatch.setattr(driver, "prefer_processes", lambda runs, workers: False)
     return calls
 
 
@@ -206,12 +209,34 @@ def test_processes_give_the_threads_table_bit_for_bit():
             "simulation.seed": {"distribution": "integers", "low": 0, "high": 1000},
         },
     )
-    threads = sweep(spec, workers=2, progress=False)
+    threads = sweep(spec, workers=2, processes=False, progress=False)
     procs = sweep(spec, workers=2, processes=True, chunk_size=2, progress=False)
     assert procs.info["processes"] and procs.counts() == {"ok": 3, "diverged": 0, "error": 3}
+    assert not threads.info["processes"]
     assert procs.equals(threads, ignore=("wall_time_s",))
+    default = sweep(spec, workers=2, progress=False)  # processes where they fork
+    assert default.info["processes"] == sys.platform.startswith("linux")
+    assert default.equals(threads, ignore=("wall_time_s",))
+    assert not sweep(spec, workers=1, progress=False).info["processes"]  # nothing to share
     with pytest.raises(InvalidValueError, match="'processes' parameter of sweep"):
         sweep(spec, processes=True, client=object(), progress=False)
+    with pytest.raises(InvalidValueError, match="'processes' parameter of sweep"):
+        sweep(spec, processes="yes", progress=False)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("platform", "runs", "workers", "expected"),
+    [
+        ("linux", 10, 2, True),
+        ("linux", 1, 2, False),
+        ("linux", 10, 1, False),
+        ("darwin", 10, 2, False),
+        ("win32", 10, 2, False),
+    ],
+)
+def test_processes_by_default_where_they_fork(monkeypatch, platform, runs, workers, expected):
+    monkeypatch.setattr(sys, "platform", platform)
+    assert prefer_processes(runs, workers) is expected
 
 
 def test_failures_are_recorded_per_run_and_the_sweep_goes_on():

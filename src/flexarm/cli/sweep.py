@@ -167,10 +167,11 @@ examples/sweep_noise.toml; schema in flexarm.sweeps.spec.
 """
 
 _EPILOG = """\
-runs: on every core of this machine by default (threads: each run's compiled loop
-releases the GIL; --processes: worker processes, faster for short runs whose Python
-set-up dominates); --scheduler tcp://HOST:8786 sends chunks of runs to a Dask cluster
-(pip install 'flexarm[dask]'; see flexarm.sweeps.cluster for SLURM and the pitfalls).
+runs: on every core of this machine by default, in worker processes forked from this
+one on Linux (a run's Python set-up holds the GIL; --threads keeps them in threads,
+whose compiled loops release it; same numbers); --scheduler tcp://HOST:8786 sends
+chunks of runs to a Dask cluster (pip install 'flexarm[dask]'; see
+flexarm.sweeps.cluster for SLURM and the pitfalls).
 A run that diverges or cannot be built is recorded (status diverged or error, with
 the message) and the sweep goes on.
 
@@ -202,14 +203,25 @@ def add_parser(sub: Any) -> None:
         "--workers",
         type=_positive,
         metavar="N",
-        help="threads on this machine (default: every core); with --scheduler, threads "
-        "per task on its worker (default 1)",
+        help="processes or threads on this machine (default: every core); with "
+        "--scheduler, threads per task on its worker (default 1)",
     )
-    p.add_argument(
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument(
         "--processes",
-        action="store_true",
-        help="run in worker processes forked from this one rather than threads: faster "
-        "when runs are short and their Python set-up dominates (same numbers)",
+        action="store_const",
+        const=True,
+        dest="processes",
+        help="run in worker processes forked from this one (the default on Linux for "
+        "more than one run and worker: a run's Python set-up holds the GIL)",
+    )
+    mode.add_argument(
+        "--threads",
+        action="store_const",
+        const=False,
+        dest="processes",
+        help="run in threads of this process (the default where processes cannot be "
+        "forked; same numbers)",
     )
     p.add_argument(
         "--scheduler",

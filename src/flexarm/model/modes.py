@@ -53,6 +53,7 @@ tip (``lam`` far below one) the shape near the clamp, which is
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -176,8 +177,15 @@ def clamped_mass_roots(
                 f"The '{name}' parameter of {owner} must be at most {MAX_TIP_RATIO:g} (beyond "
                 f"it the frequency equation overflows float64). Got {ratio!r} instead."
             )
+    return _clamped_mass_roots(n, mu, jr).copy()
+
+
+@functools.lru_cache(maxsize=64)
+def _clamped_mass_roots(n: int, mu: float, jr: float) -> NDArray[np.float64]:
+    """:func:`clamped_mass_roots` of checked arguments, computed once per process for
+    each (read-only: arms built again and again, as in a sweep, share them)."""
     if n == 0:
-        return np.zeros(0)
+        return _frozen(np.zeros(0))
 
     # Lowest possible root: a rigid tip body on a massless beam bounds it from below.
     small = min(1.0, (3.0 / max(mu, 1e-300)) ** 0.25, (1.0 / max(jr, 1e-300)) ** 0.25)
@@ -194,7 +202,7 @@ def clamped_mass_roots(
         grid: NDArray[np.float64] = upper + _LINEAR_STEP * steps
         _collect_roots(grid, mu, jr, roots, n)
         upper = float(grid[-1])
-    return np.asarray(roots[:n])
+    return _frozen(np.asarray(roots[:n]))
 
 
 def _collect_roots(
@@ -483,9 +491,7 @@ class BeamModes:
     def _quadrature(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Gauss–Legendre nodes and weights on ``[0, L]`` exact for these modes."""
         if "quad" not in self._cache:
-            from scipy.special import roots_legendre  # O(npts), for any number of modes
-
-            t, w = roots_legendre(_quadrature_points(self.roots))
+            t, w = _legendre_rule(_quadrature_points(self.roots))
             L = self.length
             self._cache["quad"] = (_frozen(0.5 * L * (t + 1.0)), _frozen(0.5 * L * w))
         return self._cache["quad"]  # type: ignore[no-any-return]
@@ -563,6 +569,16 @@ class BeamModes:
         gm = np.diag(self.generalized_mass)
         self._cache.pop("M", None)
         return 1.0 / np.sqrt(gm)
+
+
+@functools.lru_cache(maxsize=16)
+def _legendre_rule(n_nodes: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Gauss–Legendre nodes and weights on ``[-1, 1]`` (SciPy's, O(n) for any number of
+    modes), computed once per process for each ``n_nodes`` (read-only)."""
+    from scipy.special import roots_legendre
+
+    t, w = roots_legendre(n_nodes)
+    return _frozen(t), _frozen(w)
 
 
 def _frozen(a: NDArray[Any]) -> NDArray[Any]:

@@ -32,7 +32,7 @@ from .._version import __version__
 from ..errors import InvalidValueError
 from ..sim.batch import default_workers
 from .cluster import iter_cluster_records
-from .execute import Item, iter_process_records, iter_records
+from .execute import Item, iter_process_records, iter_records, prefer_processes
 from .journal import (
     JOURNAL_FILE,
     SWEEP_FILE,
@@ -87,7 +87,7 @@ def sweep(
     workers: int | None = None,
     client: Client | None = None,
     chunk_size: int | None = None,
-    processes: bool = False,
+    processes: bool | None = None,
     parquet: bool | None = None,
     progress: bool | None = None,
 ) -> SweepTable:
@@ -115,11 +115,15 @@ def sweep(
     chunk_size : int, optional
         Runs per Dask task (default: about four tasks per worker thread) or per
         chunk of a process (default: the same, at most 16).
-    processes : bool
-        Run in worker processes forked from this one rather than in threads
-        (:func:`~flexarm.sweeps.execute.iter_process_records`): faster when the
-        runs are short and their set-up, which holds the GIL, dominates. The
-        numbers are the same.
+    processes : bool, optional
+        Run in worker processes forked from this one
+        (:func:`~flexarm.sweeps.execute.iter_process_records`) rather than in
+        threads (:func:`~flexarm.sweeps.execute.iter_records`). Default (None):
+        processes where the platform forks (Linux) and the sweep has more than one
+        run and one worker, threads otherwise
+        (:func:`~flexarm.sweeps.execute.prefer_processes`). A run's set-up holds
+        the GIL, so threads share one interpreter for that part; processes do not.
+        The numbers are the same either way.
     parquet : bool, optional
         Also write ``runs.parquet``: None (default) when pyarrow is installed,
         True always (an error without pyarrow), False never.
@@ -151,6 +155,10 @@ def sweep(
         check_int(workers, "workers", _OWNER, minimum=1)
     if chunk_size is not None:
         check_int(chunk_size, "chunk_size", _OWNER, minimum=1)
+    if processes is not None and not isinstance(processes, bool):
+        raise InvalidValueError(
+            f"The 'processes' parameter of sweep must be a bool or None. Got {processes!r} instead."
+        )
     if processes and client is not None:
         raise InvalidValueError(
             "The 'processes' parameter of sweep must be False with a 'client' (a Dask "
@@ -181,6 +189,8 @@ def sweep(
     todo = [r for r in unique if r.run_id not in records]
     bar = _Progress(len(unique), resumed, sys.stderr.isatty() if progress is None else progress)
     items: Iterator[Item] = ((r.run_id, spec.scenario(r.params)) for r in todo)
+    if processes is None:
+        processes = client is None and prefer_processes(len(todo), workers or default_workers())
     if client is not None:
         stream: Iterator[Record] = iter_cluster_records(
             list(items), client, chunk_size=chunk_size, workers=workers or 1

@@ -13,12 +13,13 @@ does with the chunk it is sent (:mod:`flexarm.sweeps.cluster`), and what each
 process does with its chunks in :func:`iter_process_records`.
 
 Threads or processes: a run's compiled loop releases the GIL, but its set-up
-(building the scenario, the reference, the sampled-data check, the metrics) is
-Python and holds it. For short runs the set-up dominates (about three quarters
-of a 2 s run of the paper's scenario), and threads then share one GIL most of
-the time; :func:`iter_process_records` runs chunks in worker processes forked
-from this one instead (each inherits the loaded simulator; no GIL is shared).
-The numbers are the same bit for bit either way.
+(building the scenario, the sampled-data check, the metrics) is Python and holds
+it. For short runs the set-up is a large share (about 60 % of a 2 s run of the
+paper's scenario), and threads then share one GIL much of the time;
+:func:`iter_process_records` runs chunks in worker processes forked from this
+one instead (each inherits the loaded simulator; no GIL is shared). Sweeps take
+processes by default where they can be forked (:func:`prefer_processes`). The
+numbers are the same bit for bit either way.
 """
 
 from __future__ import annotations
@@ -36,7 +37,14 @@ from ..sim.results import SimulationResult
 from .reader import Value
 from .records import Record, record_of, run_scenario
 
-__all__ = ["Item", "default_chunk_size", "iter_process_records", "iter_records", "run_chunk"]
+__all__ = [
+    "Item",
+    "default_chunk_size",
+    "iter_process_records",
+    "iter_records",
+    "prefer_processes",
+    "run_chunk",
+]
 
 Item = tuple[str, Mapping[str, Value]]
 """One run to do: its id and its full scenario mapping (plain data: it pickles)."""
@@ -92,6 +100,16 @@ def default_chunk_size(n_runs: int, workers: int, at_most: int | None = None) ->
     """
     size = max(1, math.ceil(n_runs / (4 * max(1, workers))))
     return size if at_most is None else min(size, at_most)
+
+
+def prefer_processes(n_runs: int, workers: int) -> bool:
+    """Whether a local sweep of ``n_runs`` runs on ``workers`` workers runs in processes
+    by default: where processes can be forked from this one (Linux: they start with
+    the simulator loaded, in milliseconds) and there is more than one run and one
+    worker to share. Elsewhere processes would be spawned (a fresh interpreter
+    that imports and loads everything, and a script needs the ``__main__`` guard),
+    so threads are the default there."""
+    return sys.platform.startswith("linux") and n_runs > 1 and workers > 1
 
 
 def _ignore_sigint() -> None:
