@@ -22,7 +22,6 @@ True
 
 from __future__ import annotations
 
-import copy
 import hashlib
 import json
 import re
@@ -143,6 +142,20 @@ def _walk(data: dict[str, Value], parts: tuple[str | int, ...], key: str) -> dic
     return node
 
 
+def _copy(value: Value) -> Value:
+    """A deep copy of a scenario value (tables, arrays and scalars: what TOML and JSON
+    hold), without ``copy.deepcopy``'s bookkeeping (a sweep copies its base per run)."""
+    if isinstance(value, Mapping):
+        return _copy_table(value)
+    if isinstance(value, list):
+        return [_copy(v) for v in value]
+    return value
+
+
+def _copy_table(table: Mapping[str, Value]) -> dict[str, Value]:
+    return {k: _copy(v) for k, v in table.items()}
+
+
 def with_changes(base: Mapping[str, Value], changes: Mapping[str, Value]) -> dict[str, Value]:
     """A deep copy of ``base`` with each dotted key of ``changes`` set.
 
@@ -159,7 +172,7 @@ def with_changes(base: Mapping[str, Value], changes: Mapping[str, Value]) -> dic
         If a key cannot be set (a bad key, an index beyond the base's array, a
         key inside something that is not a table).
     """
-    data: dict[str, Value] = copy.deepcopy(dict(base))
+    data: dict[str, Value] = _copy_table(base)
     parsed = [(key, parse_key(key), value) for key, value in changes.items()]
     kinds = [c for c in parsed if c[1][-1] == "kind"]
     for key, parts, value in kinds:
@@ -172,10 +185,10 @@ def with_changes(base: Mapping[str, Value], changes: Mapping[str, Value]) -> dic
             keep = _KEEP_ON_KIND_CHANGE.get(tuple(str(p) for p in parts[:-1]), ())
             for name in [n for n in table if n not in keep]:
                 del table[name]
-        table["kind"] = copy.deepcopy(value)
+        table["kind"] = _copy(value)
     for key, parts, value in parsed:
         if parts[-1] != "kind":
-            _walk(data, parts, key)[str(parts[-1])] = copy.deepcopy(value)
+            _walk(data, parts, key)[str(parts[-1])] = _copy(value)
     return data
 
 
