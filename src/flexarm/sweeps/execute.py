@@ -85,6 +85,18 @@ def run_chunk(items: Sequence[Item], workers: int = 1) -> list[Record]:
     mappings), the worker builds and simulates each run with its own copy of
     flexarm and its Numba cache, and only the records travel back.
     """
+    if workers == 1:  # in this thread, one after another: no pool to hand runs to
+        from threadpoolctl import threadpool_limits
+
+        records = []
+        with threadpool_limits(limits=1, user_api="blas"):  # as the batched simulator
+            for run_id, scenario in items:
+                try:
+                    outcome: SimulationResult | Exception = run_scenario(scenario)
+                except Exception as exc:  # the run's failure is its record
+                    outcome = exc
+                records.append(record_of(run_id, outcome))
+        return records
     order = {run_id: k for k, (run_id, _) in enumerate(items)}
     records = list(iter_records(items, workers=workers))
     return sorted(records, key=lambda rec: order[rec["run_id"]])
