@@ -26,8 +26,9 @@ loading excluded):
 ``flexarm sweep``
     ``flexarm sweep SWEEP.toml --out DIR --json`` run in this process
     (``flexarm.cli.main``), into a new directory each time: reading and checking
-    the sweep, the runs on every core (threads), the journal, the CSV and Parquet
-    tables and the summary. Timed ``--repeat`` times.
+    the sweep, the runs on every core (the default: forked processes on Linux), the
+    journal, the CSV and Parquet tables and the summary. Timed ``--repeat`` times;
+    then the same with ``--threads`` (threads of this process, the default before).
 
 The ratio is ``flexarm sweep`` / ``ideal`` (best against best, median against
 median); the target of issue 14 is 1.2 or less. On a shared machine, run it
@@ -157,9 +158,9 @@ def main_(argv: list[str] | None = None) -> None:
         loop_share = statistics.median(s[2] / s[0] for s in singles)
         print(f"timing {args.repeat} sweeps of {args.runs} runs ...", file=sys.stderr)
         sweeps = [time_sweep(path, workdir / f"out{k}") for k in range(args.repeat)]
-        print(f"timing {args.repeat} sweeps with --processes ...", file=sys.stderr)
-        proc_walls = [
-            time_sweep(path, workdir / f"p{k}", ("--processes",))[0] for k in range(args.repeat)
+        print(f"timing {args.repeat} sweeps with --threads ...", file=sys.stderr)
+        thread_walls = [
+            time_sweep(path, workdir / f"p{k}", ("--threads",))[0] for k in range(args.repeat)
         ]
         cluster_walls = None if args.no_cluster else time_cluster(path, workdir, args, cores)
     machine["loadavg_at_end"] = list(os.getloadavg())
@@ -183,14 +184,14 @@ def main_(argv: list[str] | None = None) -> None:
         },
         "statuses": {k: sweeps[0][1][k] for k in ("ok", "diverged", "error")},
     }
-    result["processes_sweep_s"] = {
-        "best": min(proc_walls),
-        "median": statistics.median(proc_walls),
-        "all": proc_walls,
+    result["threads_sweep_s"] = {
+        "best": min(thread_walls),
+        "median": statistics.median(thread_walls),
+        "all": thread_walls,
     }
-    result["processes_ratio"] = {
-        "best": min(proc_walls) / ideal_best,
-        "median": statistics.median(proc_walls) / ideal_median,
+    result["threads_ratio"] = {
+        "best": min(thread_walls) / ideal_best,
+        "median": statistics.median(thread_walls) / ideal_median,
     }
     if cluster_walls:
         result["cluster_sweep_s"] = {
@@ -216,8 +217,8 @@ def main_(argv: list[str] | None = None) -> None:
         ("ratio sweep / ideal", result["ratio"]["best"], result["ratio"]["median"]),
     ]
     rows += [
-        ("flexarm sweep --processes, s", min(proc_walls), statistics.median(proc_walls)),
-        ("ratio --processes / ideal", *result["processes_ratio"].values()),
+        ("flexarm sweep --threads, s", min(thread_walls), statistics.median(thread_walls)),
+        ("ratio --threads / ideal", *result["threads_ratio"].values()),
     ]
     if cluster_walls:
         c = result["cluster_sweep_s"]

@@ -206,7 +206,12 @@ class Controller:
         """The ``params`` vector the simulator passes, knowing the control period
         ``dt`` (s) and the run's reference vectors (shape (K, 6 + 4 N)). Default:
         :meth:`parameters_for`; laws designed for a period (:class:`flexarm.control.lqg.LQG`)
-        override it."""
+        override it.
+
+        A law that overrides it is given every reference vector of the run, which the
+        simulator then computes before the run; a law that does not may be given the
+        first one only (a path of straight segments is then computed inside the
+        compiled loop, instant by instant)."""
         return self.parameters_for(arm, sensor)
 
     def __call__(

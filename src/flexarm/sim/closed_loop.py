@@ -7,10 +7,15 @@ the same sampled-data loop with SciPy's adaptive ``solve_ivp`` (DOP853) between
 control instants instead, as the accuracy reference for the fixed-step path.
 
 :func:`simulate` is three steps: the reference pipeline
-(:func:`flexarm.sim.references.reference_signals`: trajectory, shaper, delay,
+(:class:`flexarm.sim.references.ReferencePipeline`: trajectory, shaper, delay,
 joint references), the loop driver (:mod:`flexarm.sim.driver`), and the result
-assembly (:func:`flexarm.sim.results.assemble_result`). Tracking errors are
-always measured against the desired, unshaped, undelayed path.
+assembly (:func:`flexarm.sim.results.assemble_result`). A path of straight
+segments (the square, lines, waypoints) without shaping, smoothing, feedforward or
+a sensed point short of the end effector is not precomputed: the compiled loop
+computes its reference at each instant with the pipeline's own kernels (the same
+numbers), and records it with the tip, so that a run's time is the loop's (unless
+the law's design reads the whole reference, as the LQG's does). Tracking errors
+are always measured against the desired, unshaped, undelayed path.
 
 Default control period: 0.2 ms (5 kHz). The paper's arm has no hub inertia, so
 the inertia a joint sees instantly is small (the links' modes take up the
@@ -151,7 +156,7 @@ def simulate(
     record_every : int
         Record every ``record_every``-th control instant, and the last one (>= 1;
         default every instant). The run itself is the same; a long run then fits
-        in bounded memory (the reference is computed block by block as it goes).
+        in bounded memory (the reference is computed as the run goes).
         The metrics are those of the recorded instants.
     stop : threading.Event or alike, optional
         Checked between chunks of the run (about every 2**15 control instants):
