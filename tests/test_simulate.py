@@ -269,6 +269,31 @@ def test_result_metrics_and_series(paper):
     assert m["residual_vibration_m"] > 0
 
 
+@pytest.mark.parametrize("n_links", [1, 2, 3])
+def test_control_effort_is_the_trapezoid_of_the_squared_torques(n_links):
+    """Against a sum written out interval by interval; rows with a NaN (the tail of a
+    diverged run) are dropped and their neighbours joined."""
+    import itertools
+    from fractions import Fraction
+
+    from flexarm.sim.metrics import control_effort
+
+    rng = np.random.default_rng(n_links)
+    t = np.cumsum(rng.uniform(0.5, 1.5, 40))
+    tau = rng.normal(size=(40, n_links))
+    tau[[5, 6, 30]] = np.nan
+    ok = [k for k in range(40) if np.all(np.isfinite(tau[k]))]
+    power = [sum(Fraction(float(v)) ** 2 for v in tau[k]) for k in ok]
+    exact = sum(
+        (Fraction(float(t[b])) - Fraction(float(t[a]))) * (power[i] + power[i + 1]) / 2
+        for i, (a, b) in enumerate(itertools.pairwise(ok))
+    )
+    assert control_effort(t, tau) == pytest.approx(float(exact), rel=1e-13)
+    full = tau[ok]
+    assert control_effort(t[ok], full) == pytest.approx(float(exact), rel=1e-13)
+    assert np.isnan(control_effort(t[:2], tau[5:7]))  # fewer than two finite rows
+
+
 def test_to_pandas(paper, short_square):
     pd = pytest.importorskip("pandas")
     df = simulate(paper, trajectory=short_square, duration=0.1).to_pandas()

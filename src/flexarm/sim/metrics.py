@@ -87,6 +87,9 @@ def settling_time(t: F64, error: F64, start: float, tolerance: float) -> float:
 def control_effort(t: F64, tau: F64) -> float:
     """``int sum_i tau_i**2 dt`` in N**2 m**2 s (trapezoid rule, NaN rows dropped)."""
     ok = np.all(np.isfinite(tau), axis=1)
-    if np.count_nonzero(ok) < 2:
+    kept = np.count_nonzero(ok)
+    if kept < 2:
         return float("nan")
-    return float(np.trapezoid(np.sum(tau[ok] ** 2, axis=1), t[ok]))
+    if kept < ok.shape[0]:  # (a diverged run's last rows; else no copies)
+        tau, t = tau[ok], t[ok]
+    return float(np.trapezoid(np.einsum("ij,ij->i", tau, tau), t))
