@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -49,7 +49,7 @@ from .prediction import check_record
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["Bands", "bootstrap_bands", "circular_blocks"]
+__all__ = ["Bands", "FittedIdentifier", "bootstrap_bands", "circular_blocks"]
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -152,7 +152,31 @@ def draw_impulse_band(ax: Any, bands: Bands) -> None:
     ax.fill_between(k, bands.impulse_low, bands.impulse_high, alpha=0.3, lw=0, label=label)
 
 
-def _replicate(est: Any, u: F64, y: F64) -> tuple[F64, F64, F64] | None:
+class FittedIdentifier(Protocol):
+    """What :func:`bootstrap_bands` reads of a fitted
+    :class:`~flexarm.ident.hammerstein.HammersteinIdentifier`: its settings, the path
+    it took and the structure it found, refitted on each resampled record."""
+
+    n_lags: int
+    _params: dict[str, Any]  # the checked hyperparameters
+
+    @property
+    def n_samples_(self) -> int: ...
+    @property
+    def method_(self) -> str: ...
+    @property
+    def order_(self) -> int: ...
+    @property
+    def grid_(self) -> F64: ...
+    @property
+    def nonlinearity_(self) -> F64: ...
+    @property
+    def impulse_response_(self) -> F64: ...
+    @property
+    def input_weights_(self) -> F64: ...
+
+
+def _replicate(est: FittedIdentifier, u: F64, y: F64) -> tuple[F64, F64, F64] | None:
     """``(grid, phi, impulse)`` of one resampled record by the fitted path and structure."""
     p = est._params
     if est.method_ == "white":
@@ -174,7 +198,7 @@ def _replicate(est: Any, u: F64, y: F64) -> tuple[F64, F64, F64] | None:
 
 
 def bootstrap_bands(
-    est: Any,
+    est: FittedIdentifier,
     u: ArrayLike,
     y: ArrayLike,
     *,
