@@ -269,6 +269,21 @@ def test_result_metrics_and_series(paper):
     assert m["residual_vibration_m"] > 0
 
 
+def test_the_rigid_tip_and_the_elastic_deflection_of_a_three_link_run():
+    """Against the rigid kinematics of model.kinematics and NumPy's row norms."""
+    from flexarm.model.kinematics import rigid_point
+
+    arm = fa.FlexibleArm([fa.Link(1.5, 1676.0, 0.335, n_modes=2, hub_inertia=1.0)] * 3)
+    t = np.linspace(0.0, 0.5, 501)
+    res = fa.simulate_open_loop(arm, t, np.column_stack([np.sin(7 * t), -np.ones_like(t), t]))
+    pos, _ = rigid_point(arm.link_lengths, res.q[:, :3])
+    np.testing.assert_allclose(res.rigid_tip, pos, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(
+        res.elastic_deflection, np.linalg.norm(res.tip - pos, axis=1), rtol=0, atol=1e-14
+    )
+    assert np.max(res.elastic_deflection) > 1e-4  # the links did bend
+
+
 @pytest.mark.parametrize("n_links", [1, 2, 3])
 def test_control_effort_is_the_trapezoid_of_the_squared_torques(n_links):
     """Against a sum written out interval by interval; rows with a NaN (the tail of a

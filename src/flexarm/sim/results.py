@@ -129,7 +129,7 @@ class SimulationResult:
     @property
     def error(self) -> F64:
         """End-effector position error ``|tip - desired|``, m, shape (K,)."""
-        return np.linalg.norm(self.tip - self.desired, axis=1)  # type: ignore[no-any-return]
+        return _row_norms(self.tip - self.desired)
 
     @property
     def link_deflections(self) -> F64:
@@ -143,13 +143,15 @@ class SimulationResult:
     @property
     def rigid_tip(self) -> F64:
         """Where the rigid kinematics of the joint angles puts the tip, m, (K, 2)."""
-        phi = np.cumsum(self.q[:, : self.n_links], axis=1)
+        phi = self.q[:, : self.n_links].copy()  # absolute angles: a cumulative sum by column
+        for i in range(1, self.n_links):
+            phi[:, i] += phi[:, i - 1]
         return np.stack([np.cos(phi) @ self.link_lengths, np.sin(phi) @ self.link_lengths], axis=1)
 
     @property
     def elastic_deflection(self) -> F64:
         """Distance between the true tip and the rigid-kinematics tip, m, (K,)."""
-        return np.linalg.norm(self.tip - self.rigid_tip, axis=1)  # type: ignore[no-any-return]
+        return _row_norms(self.tip - self.rigid_tip)
 
     # ------------------------------------------------------------------ metrics
     def metrics(
@@ -384,6 +386,13 @@ def envelope(t: F64, y: F64, max_points: int) -> tuple[F64, F64]:
         keep += sorted({a + int(np.nanargmin(seg)), a + int(np.nanargmax(seg))})
     rows = np.array(keep, dtype=np.int64)
     return t[rows], y[rows]
+
+
+def _row_norms(d: F64) -> F64:
+    """``|d_k|`` of each row (as ``numpy.linalg.norm(d, axis=1)``, without its
+    temporaries)."""
+    norms: F64 = np.sqrt(np.einsum("ij,ij->i", d, d))
+    return norms
 
 
 def _float(value: JSONValue, default: float) -> float:
