@@ -801,3 +801,20 @@ def test_clamped_mass_roots_rejects_bad_input(kwargs, param, exc):
 def test_cantilever_roots_rejects_bad_n(n, exc):
     with pytest.raises(exc, match="'n'"):
         cantilever_roots(n)
+
+
+def test_the_roots_kept_per_process_are_the_computed_ones_and_yours_to_change():
+    """Small root sets are kept once per process (a sweep builds the same links again
+    and again): each call still returns its own writable array, equal to a fresh
+    computation; large sets are computed each time."""
+    from flexarm.model import modes
+
+    first = clamped_mass_roots(5, 0.3, 0.01)
+    first[:] = -1.0  # the caller's own copy
+    again = clamped_mass_roots(5, 0.3, 0.01)
+    assert np.array_equal(again, modes._roots(5, 0.3, 0.01)) and np.all(again > 0)
+    big = modes._CACHED_UP_TO + 1
+    np.testing.assert_array_equal(clamped_mass_roots(big, 0.3), modes._roots(big, 0.3, 0.0))
+    small, large = (BeamModes(2.0, 1676.0, 0.335, n_modes=m) for m in (5, big))
+    # the kept rule (5 modes) and one computed afresh (65 modes; more nodes): both exact
+    np.testing.assert_allclose(small.mass_integral, large.mass_integral[:5], rtol=1e-12)

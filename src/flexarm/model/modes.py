@@ -177,15 +177,26 @@ def clamped_mass_roots(
                 f"The '{name}' parameter of {owner} must be at most {MAX_TIP_RATIO:g} (beyond "
                 f"it the frequency equation overflows float64). Got {ratio!r} instead."
             )
-    return _clamped_mass_roots(n, mu, jr).copy()
+    if n <= _CACHED_UP_TO:  # arms built again and again, as in a sweep, share them
+        return _cached_roots(n, mu, jr).copy()
+    return _roots(n, mu, jr)
+
+
+_CACHED_UP_TO = 64
+"""Root and quadrature arrays of up to this many modes are kept once per process (a few
+kB each; larger ones are computed each time rather than held)."""
 
 
 @functools.lru_cache(maxsize=64)
-def _clamped_mass_roots(n: int, mu: float, jr: float) -> NDArray[np.float64]:
-    """:func:`clamped_mass_roots` of checked arguments, computed once per process for
-    each (read-only: arms built again and again, as in a sweep, share them)."""
+def _cached_roots(n: int, mu: float, jr: float) -> NDArray[np.float64]:
+    """:func:`_roots`, once per process for each argument (read-only)."""
+    return _frozen(_roots(n, mu, jr))
+
+
+def _roots(n: int, mu: float, jr: float) -> NDArray[np.float64]:
+    """:func:`clamped_mass_roots` of checked arguments."""
     if n == 0:
-        return _frozen(np.zeros(0))
+        return np.zeros(0)
 
     # Lowest possible root: a rigid tip body on a massless beam bounds it from below.
     small = min(1.0, (3.0 / max(mu, 1e-300)) ** 0.25, (1.0 / max(jr, 1e-300)) ** 0.25)
@@ -202,7 +213,7 @@ def _clamped_mass_roots(n: int, mu: float, jr: float) -> NDArray[np.float64]:
         grid: NDArray[np.float64] = upper + _LINEAR_STEP * steps
         _collect_roots(grid, mu, jr, roots, n)
         upper = float(grid[-1])
-    return _frozen(np.asarray(roots[:n]))
+    return np.asarray(roots[:n])
 
 
 def _collect_roots(
@@ -491,7 +502,9 @@ class BeamModes:
     def _quadrature(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Gauss–Legendre nodes and weights on ``[0, L]`` exact for these modes."""
         if "quad" not in self._cache:
-            t, w = _legendre_rule(_quadrature_points(self.roots))
+            npts = _quadrature_points(self.roots)
+            small = self.n_modes <= _CACHED_UP_TO
+            t, w = _legendre_rule(npts) if small else _legendre_nodes(npts)
             L = self.length
             self._cache["quad"] = (_frozen(0.5 * L * (t + 1.0)), _frozen(0.5 * L * w))
         return self._cache["quad"]  # type: ignore[no-any-return]
@@ -571,13 +584,19 @@ class BeamModes:
         return 1.0 / np.sqrt(gm)
 
 
-@functools.lru_cache(maxsize=16)
-def _legendre_rule(n_nodes: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _legendre_nodes(n_nodes: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Gauss–Legendre nodes and weights on ``[-1, 1]`` (SciPy's, O(n) for any number of
-    modes), computed once per process for each ``n_nodes`` (read-only)."""
+    modes)."""
     from scipy.special import roots_legendre
 
     t, w = roots_legendre(n_nodes)
+    return np.asarray(t, dtype=np.float64), np.asarray(w, dtype=np.float64)
+
+
+@functools.lru_cache(maxsize=16)
+def _legendre_rule(n_nodes: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`_legendre_nodes`, once per process for each ``n_nodes`` (read-only)."""
+    t, w = _legendre_nodes(n_nodes)
     return _frozen(t), _frozen(w)
 
 
