@@ -132,6 +132,7 @@ def test_the_stream_is_the_pipelines_rows():
     ids=["circle", "smoothing", "feedforward", "point short of the tip"],
 )
 def test_what_cannot_stream_is_precomputed(options):
+    options = dict(options)  # (the parameter is shared between runs)
     sensor = options.pop("sensor", None)
     pipeline = ReferencePipeline(
         ARM,
