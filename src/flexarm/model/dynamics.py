@@ -529,11 +529,17 @@ def forward_dynamics(q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace,
     InvalidTypeError, InvalidValueError
         Naming the argument of the wrong type, dtype, layout or shape.
     """
-    owner = "forward_dynamics"
+    _check_forward(q, dq, tau, model, ws, ddq, "forward_dynamics")
+    _forward_dynamics(q, dq, tau, model, ws, ddq)
+
+
+def _check_forward(
+    q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64, owner: str
+) -> None:
+    """The arguments of a forward-dynamics kernel, checked (errors name ``owner``)."""
     _, n = check_state(q, dq, tau, model, owner)
     check_workspace(ws, n, owner)
     check_vector(ddq, "ddq", owner, (n,), writable=True)
-    _forward_dynamics(q, dq, tau, model, ws, ddq)
 
 
 def forward_dynamics_general(
@@ -541,10 +547,7 @@ def forward_dynamics_general(
 ) -> None:
     """:func:`forward_dynamics` by the general kernels for any structure, the dense
     or the recursive one, whichever is the faster for it (checked)."""
-    owner = "forward_dynamics_general"
-    _, n = check_state(q, dq, tau, model, owner)
-    check_workspace(ws, n, owner)
-    check_vector(ddq, "ddq", owner, (n,), writable=True)
+    _check_forward(q, dq, tau, model, ws, ddq, "forward_dynamics_general")
     _forward_dynamics_general(q, dq, tau, model, ws, ddq)
 
 
@@ -553,10 +556,7 @@ def forward_dynamics_dense(
 ) -> None:
     """:func:`forward_dynamics` by the mass matrix and its factorisation, for any
     structure (checked)."""
-    owner = "forward_dynamics_dense"
-    _, n = check_state(q, dq, tau, model, owner)
-    check_workspace(ws, n, owner)
-    check_vector(ddq, "ddq", owner, (n,), writable=True)
+    _check_forward(q, dq, tau, model, ws, ddq, "forward_dynamics_dense")
     _forward_dynamics_dense(q, dq, tau, model, ws, ddq)
 
 
@@ -565,10 +565,7 @@ def forward_dynamics_recursive(
 ) -> None:
     """:func:`forward_dynamics` by the articulated-body recursion
     (:mod:`flexarm.model.dynamics_recursive`), for any structure (checked)."""
-    owner = "forward_dynamics_recursive"
-    _, n = check_state(q, dq, tau, model, owner)
-    check_workspace(ws, n, owner)
-    check_vector(ddq, "ddq", owner, (n,), writable=True)
+    _check_forward(q, dq, tau, model, ws, ddq, "forward_dynamics_recursive")
     _forward_dynamics_recursive(q, dq, tau, model, ws, ddq)
 
 
