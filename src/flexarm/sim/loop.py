@@ -41,7 +41,15 @@ from ..model.dynamics_two_links import _is_two_links_one_mode
 from ..model.kernel_checks import check_model, check_vector, check_workspace
 from ._reference_kernels import ReferenceStream, stream_row
 from .integrator import _diverged, _rk4_step, _rk4_step_two_links_one_mode
-from .sensed import SensorArrays, _collocated, _sense, check_sensor_arrays, sense, sensor_arrays
+from .sensed import (
+    SensorArrays,
+    _collocated,
+    _rigid_chain_point,
+    _sense,
+    check_sensor_arrays,
+    sense,
+    sensor_arrays,
+)
 
 __all__ = [
     "DIVERGED",
@@ -226,28 +234,16 @@ def _run(
             if res > 0.0:
                 v = np.round(v / res) * res
             delayed[c] = v
-        if joint_sensor:
-            # rigid kinematics (lever lengths of the sensor) of the measured angles
-            px = 0.0
-            py = 0.0
-            vx = 0.0
-            vy = 0.0
-            phi = 0.0
-            phid = 0.0
+        if joint_sensor:  # the measured angles, and the sensor's point from them
             for i in range(n_links):
                 y[o_angle + i] = delayed[i]
                 y[o_rate + i] = delayed[n_links + i]
-                phi += delayed[i]
-                phid += delayed[n_links + i]
-                lever = sensor.levers[i]
-                px += lever * np.cos(phi)
-                py += lever * np.sin(phi)
-                vx -= lever * np.sin(phi) * phid
-                vy += lever * np.cos(phi) * phid
-            y[o_point] = px
-            y[o_point + 1] = py
-            y[o_point + 2] = vx
-            y[o_point + 3] = vy
+            _rigid_chain_point(
+                sensor.levers,
+                delayed[:n_links],
+                delayed[n_links : 2 * n_links],
+                y[o_point : o_point + 4],
+            )
         else:
             for i in range(n_links):
                 a, r = _collocated(q, dq, model, i, n_links)

@@ -152,6 +152,31 @@ def _collocated(q: F64, dq: F64, model: ArmArrays, i: int, n_links: int) -> tupl
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
+def _rigid_chain_point(levers: F64, angles: F64, rates: F64, out: F64) -> None:
+    """Position then velocity (``out[:4]``, m and m/s) of the point with these lever
+    lengths on a rigid chain at these joint angles and rates (rad, rad/s): the
+    paper's sensor model, and the point the loop forms from measured angles."""
+    px = 0.0
+    py = 0.0
+    vx = 0.0
+    vy = 0.0
+    phi = 0.0
+    phid = 0.0
+    for i in range(levers.shape[0]):
+        phi += angles[i]
+        phid += rates[i]
+        lever = levers[i]
+        px += lever * np.cos(phi)
+        py += lever * np.sin(phi)
+        vx -= lever * np.sin(phi) * phid
+        vy += lever * np.cos(phi) * phid
+    out[0] = px
+    out[1] = py
+    out[2] = vx
+    out[3] = vy
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
 def _sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> None:
     """The raw (true, undelayed) sensed signal: the encoder angles then rates, or
     the point's position then velocity (deflected, or the paper's rigid
@@ -167,27 +192,9 @@ def _sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) ->
             a, r = _collocated(q, dq, model, i, n_links)
             out[i] = a
             out[n_links + i] = r
-    elif sensor.rigid[0]:
-        # the paper's sensor model: rigid kinematics of the encoder angles
-        px = 0.0
-        py = 0.0
-        vx = 0.0
-        vy = 0.0
-        phi = 0.0
-        phid = 0.0
-        for i in range(n_links):
-            a, r = _collocated(q, dq, model, i, n_links)
-            phi += a
-            phid += r
-            lever = sensor.levers[i]
-            px += lever * np.cos(phi)
-            py += lever * np.sin(phi)
-            vx -= lever * np.sin(phi) * phid
-            vy += lever * np.cos(phi) * phid
-        out[0] = px
-        out[1] = py
-        out[2] = vx
-        out[3] = vy
+    elif sensor.rigid[0]:  # the paper's sensor model: rigid kinematics of the encoders
+        e = model.mode_start[n_links] if model.joint.shape[0] > 0 else 0  # motors or joints
+        _rigid_chain_point(sensor.levers, q[e : e + n_links], dq[e : e + n_links], out)
     else:
         _point_kinematics(q, dq, model, link, sensor.distance[0], sensor.phi, out)
 
