@@ -50,7 +50,7 @@ import flexarm as fa
 from exudyn_models import EXUDYN_MISSING, TorquePulses, run_exudyn
 from flexarm.control.trajectories import Square
 from flexarm.sim import SimulationError, joint_reference
-from flexarm.studies.prescribed_motion import simulate_prescribed
+from flexarm.sim.prescribed import simulate_prescribed
 from flexarm.studies.spin_up import KANE_LINK, kane_motion
 
 PAPER = fa.Link(4.5, 1676.0, 0.335)

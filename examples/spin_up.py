@@ -3,7 +3,7 @@
 Kane, Ryan & Banerjee (J. Guidance, Control and Dynamics 10(2), 1987): a 10 m beam
 (EI = 1.4e4 N m^2, rho A = 1.2 kg/m) clamped to a hub whose angle is prescribed,
 spun up smoothly over 15 s to a final rate Omega, then held at it. The hub's angle
-is imposed exactly (flexarm.studies.prescribed_motion: the limit of an infinitely
+is imposed exactly (flexarm.sim.prescribed: the limit of an infinitely
 stiff servo), and the tip deflection in the hub's frame is printed — with the
 foreshortening of the bent beam in the kinematics (geometric stiffening, the
 default) and without it (the paper's model), which diverges once the hub turns

@@ -155,7 +155,7 @@ def run_exudyn(
 
     ``drive`` is :class:`TorquePulses` (joint torques) or a joint motion
     ``motion(t) -> (theta, dtheta, ddtheta)`` (shapes (m, n_links); the joint
-    angles are prescribed, as :func:`flexarm.studies.prescribed_motion.simulate_prescribed`
+    angles are prescribed, as :func:`flexarm.sim.prescribed.simulate_prescribed`
     prescribes them; the arm starts straight at ``theta(0)``, at rest).
     ``n_elements`` ANCF elements per link; ``step`` the integrator's step (s);
     outputs every ``dt_out`` s.

@@ -31,8 +31,9 @@ def test_scenario_builds_lqg_reflected_and_the_paper_sensor():
     assert isinstance(s.controller, LQG) and s.controller.position_weight == 2e4
     assert s.controller.model is not None and s.controller.model.n_modes == (2, 2)
     assert s.sensor.model == "paper"
-    kw = s.simulate_kwargs()
-    assert kw["smoothing"] == 0.1 and kw["feedforward"] is True and kw["check_sampling"] is False
+    run = s.simulation
+    assert run.smoothing == 0.1 and run.feedforward is True and run.check_sampling is False
+    assert s.simulate_kwargs()["settings"] is run
     r = Scenario.from_dict(
         {"sensor": {"kind": "tip"}, "controller": {"kind": "reflected", "alpha": 0.6}}
     )

@@ -35,7 +35,7 @@ import flexarm as fa
 from exudyn_models import EXUDYN_MISSING, ExudynRun, TorquePulses, run_exudyn
 from flexarm.control.trajectories import Square
 from flexarm.sim import SimulationError, joint_reference
-from flexarm.studies.prescribed_motion import simulate_prescribed
+from flexarm.sim.prescribed import simulate_prescribed
 from flexarm.studies.spin_up import KANE_LINK, kane_motion
 
 pytestmark = pytest.mark.skipif(bool(EXUDYN_MISSING), reason=EXUDYN_MISSING or "")

@@ -18,8 +18,8 @@ from flexarm.fuzzy import evaluate, evaluate_into, evaluate_many, paper_system, 
 from flexarm.fuzzy.compiled import pack_system, unpack_system
 from flexarm.model import dynamics
 from flexarm.model.arrays import make_workspace
+from flexarm.sensing.channels import sense, sensor_arrays
 from flexarm.sim import integrator
-from flexarm.sim.loop import sense, sensor_arrays
 
 ARM = FlexibleArm.paper()
 N = ARM.n_dof
@@ -154,7 +154,7 @@ def test_the_other_model_kernels_check_too():
         levers=np.array([4.5, 4.5]),
         delay_steps=0,
         pade=None,
-        noise=np.zeros((0, 4)),
+        levels=np.zeros(4),
         resolution=np.zeros(4),
     )
     with pytest.raises(InvalidValueError, match="'out'"):
@@ -188,17 +188,55 @@ def _decorator_name(node: ast.expr) -> str:
     return ast.unparse(target)
 
 
+def _module_of(path: Path, root: Path) -> str:
+    parts = list(path.relative_to(root).with_suffix("").parts)
+    return ".".join(["flexarm", *(parts[:-1] if parts[-1] == "__init__" else parts)])
+
+
+def _is_module(dotted: str) -> bool:
+    """Whether ``dotted`` names one of flexarm's modules or packages."""
+    if not dotted.startswith("flexarm."):
+        return False
+    path = Path(flexarm.__file__).parent.joinpath(*dotted.split(".")[1:])
+    return path.with_suffix(".py").is_file() or (path / "__init__.py").is_file()
+
+
+def _imports(tree: ast.Module, module: str, is_package: bool) -> dict[str, tuple[str, str]]:
+    """What the top-level imports of ``module`` bind: local name -> (module, name), with
+    ``name`` empty where the local name is a module."""
+    package = module if is_package else module.rpartition(".")[0]
+    bound: dict[str, tuple[str, str]] = {}
+    for node in tree.body:
+        if isinstance(node, ast.ImportFrom):
+            base = package.split(".")[: len(package.split(".")) - max(node.level - 1, 0)]
+            source = ".".join([*base, node.module] if node.module else base)
+            if node.level == 0:
+                source = node.module or ""
+            for alias in node.names:
+                local = alias.asname or alias.name
+                sub = f"{source}.{alias.name}"
+                if _is_module(sub):
+                    bound[local] = (sub, "")  # a module
+                else:
+                    bound[local] = (source, alias.name)
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                bound[alias.asname or alias.name.split(".")[0]] = (alias.name, "")
+    return bound
+
+
 def test_internal_compiled_code_calls_the_bare_kernels():
-    """flexarm's own compiled loops call the private kernels, not the public names:
-    inside compiled code a public name is an overload that is not inlined, and one
+    """flexarm's own compiled loops call the bare kernels, not the checked public faces:
+    inside compiled code a public face is an overload that is not inlined, and one
     compiled with the refcount runtime pays an incref/decref pair for each of the
     model's ~30 arrays at every call (the closed loop ran 1.5x slower that way).
     The runtime-free overloads (``compiled_as(..., runtime_free=True)``) are calls
-    by design."""
+    by design. A bare kernel may share its face's name in an internal module: a call
+    is resolved to the module the name is bound from."""
     root = Path(flexarm.__file__).parent
     trees = {path: ast.parse(path.read_text()) for path in root.rglob("*.py")}
-    costly = set()
-    for tree in trees.values():
+    costly = set()  # (module, name) of the public faces with costly overloads
+    for path, tree in trees.items():
         for node in ast.walk(tree):
             if isinstance(node, ast.FunctionDef):
                 for dec in node.decorator_list:
@@ -207,10 +245,12 @@ def test_internal_compiled_code_calls_the_bare_kernels():
                         and _decorator_name(dec) == "compiled_as"
                         and not any(k.arg == "runtime_free" for k in dec.keywords)
                     ):
-                        costly.add(ast.unparse(dec.args[0]))
-    assert {"rk4_step", "diverged", "sense", "point_kinematics"} <= costly
+                        costly.add((_module_of(path, root), ast.unparse(dec.args[0])))
+    assert {"rk4_step", "diverged", "sense", "point_kinematics"} <= {n for _, n in costly}
     offenders = []
     for path, tree in trees.items():
+        module = _module_of(path, root)
+        bound = _imports(tree, module, path.name == "__init__.py")
         for node in ast.walk(tree):
             if not isinstance(node, ast.FunctionDef):
                 continue
@@ -218,6 +258,28 @@ def test_internal_compiled_code_calls_the_bare_kernels():
             if not names & {"nb.njit", "njit_runtime_free", "numba.njit", "njit"}:
                 continue
             for call in ast.walk(node):
-                if isinstance(call, ast.Call) and ast.unparse(call.func) in costly:
+                if not isinstance(call, ast.Call):
+                    continue
+                f = call.func
+                if isinstance(f, ast.Name):
+                    target = bound.get(f.id, (module, f.id))
+                elif isinstance(f, ast.Attribute) and isinstance(f.value, ast.Name):
+                    source, name = bound.get(f.value.id, ("", "?"))
+                    target = (source, f.attr) if not name else ("", "")
+                else:
+                    continue
+                if target in costly:
                     offenders.append(f"{path.relative_to(root)}:{call.lineno} {node.name}")
     assert not offenders, offenders
+
+
+def test_the_guard_resolves_names_to_their_modules():
+    """The guard's resolution itself: a face imported by name, a module's attribute."""
+    tree = ast.parse(
+        "from ..sensing import _channels\nfrom ..sensing.channels import sense\n"
+        "from .integrator import rk4_step\n"
+    )
+    bound = _imports(tree, "flexarm.sim.loop", False)
+    assert bound["_channels"] == ("flexarm.sensing._channels", "")
+    assert bound["sense"] == ("flexarm.sensing.channels", "sense")
+    assert bound["rk4_step"] == ("flexarm.sim.integrator", "rk4_step")

@@ -9,8 +9,8 @@ import pytest
 
 import flexarm as fa
 from flexarm.errors import InvalidTypeError, InvalidValueError
+from flexarm.sim.prescribed import simulate_prescribed
 from flexarm.studies.modal_convergence import convergence_check
-from flexarm.studies.prescribed_motion import simulate_prescribed
 from flexarm.studies.spin_up import KANE_LINK, kane_motion, spin_up
 
 ARM = fa.FlexibleArm([fa.Link(4.5, 1676.0, 0.335)] * 2)  # clamped-mass, stiffening

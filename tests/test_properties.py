@@ -12,7 +12,7 @@ import pytest
 from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
-from flexarm import FlexibleArm, Link, simulate
+from flexarm import FlexibleArm, Link
 from flexarm._budget import MEMORY_ENV, memory_limit
 from flexarm._validation import check_array, check_int, check_real
 from flexarm.cli._common import number
@@ -249,10 +249,9 @@ def test_any_scenario_loads_or_is_refused_naming_its_key(data):
         assert exc.key is None or exc.key in named or exc.key.split(".")[0] in data, exc
         assert str(exc).startswith("prop")
         return
-    kwargs = scenario.simulate_kwargs()
-    kwargs["duration"] = min(float(kwargs["duration"]), 0.004)
+    duration = min(float(scenario.simulation.duration), 0.004)
     try:
-        result = simulate(scenario.arm, **kwargs)
+        result = scenario.simulate(duration=duration)
     except (SimulationError, FlexarmError):
         return
     assert result.info["status"] == "ok"

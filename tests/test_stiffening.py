@@ -35,7 +35,7 @@ from flexarm.model.foreshortening import foreshortening_integrals, shortening_ma
 from flexarm.model.modes import BeamModes
 from flexarm.model.prescribed import prescribed_accelerations, prescribed_dynamics
 from flexarm.sim import SimulationError
-from flexarm.studies.prescribed_motion import simulate_prescribed
+from flexarm.sim.prescribed import simulate_prescribed
 
 BETA1 = 1.8751040687  # first cantilever root
 

@@ -189,23 +189,33 @@ def test_the_tip_recorded_in_the_loop_is_the_arms_kinematics(arm):
 
 
 def test_the_loop_refuses_a_bad_stream_or_tip_basis():
-    res_kwargs = _loop_arguments()
+    good, law = _loop_inputs()
+
+    def run(**changes):
+        outputs = {k[4:]: changes.pop(k) for k in list(changes) if k.startswith("out_")}
+        inputs = good._replace(**changes, out=good.out._replace(**outputs))
+        return loop.run(inputs, law.cfunc, np.zeros((0, 14)), np.zeros((0, 4)), 0, 2)
+
     with pytest.raises(InvalidValueError, match="'stream' parameter of run"):
-        loop.run(**{**res_kwargs, "stream": "square"})
+        run(stream="square")
     bad_spec = no_stream()._replace(spec=np.zeros(6))
     with pytest.raises(InvalidValueError, match=r"stream\.spec"):
-        loop.run(**{**res_kwargs, "stream": bad_spec})
+        run(stream=bad_spec)
     with pytest.raises(InvalidValueError, match="'tip_phi' parameter of run"):
-        loop.run(**{**res_kwargs, "tip_phi": np.zeros(5), "out_tip": np.empty((3, 2))})
-    with pytest.raises(InvalidValueError, match="'out_r' parameter of run"):
-        loop.run(**{**res_kwargs, "out_r": np.empty((1, 14))})
-    status, k = loop.run(**res_kwargs)
+        run(tip_phi=np.zeros(5), out_tip=np.empty((3, 2)))
+    with pytest.raises(InvalidValueError, match=r"'out\.r' parameter of run"):
+        run(out_r=np.empty((1, 14)))
+    with pytest.raises(InvalidValueError, match="'loop' parameter of run"):
+        loop.run(tuple(good), law.cfunc, np.zeros((0, 14)), np.zeros((0, 4)), 0, 2)
+    with pytest.raises(InvalidValueError, match="'noise' parameter of run"):
+        loop.run(good, law.cfunc, np.zeros((0, 14)), np.zeros((1, 4)), 0, 2)
+    status, k = run()
     assert (status, k) == (loop.OK, 2)
 
 
-def _loop_arguments():
-    """A streamed two-instant run of the paper's arm, as run's keywords."""
-    from flexarm.sim.sensed import sensor_arrays
+def _loop_inputs():
+    """A streamed two-instant run of the paper's arm: its Loop, and the law."""
+    from flexarm.sensing.channels import sensor_arrays
 
     sensor = sensor_arrays(
         link=-1,
@@ -215,18 +225,10 @@ def _loop_arguments():
         levers=np.array([4.5, 4.5]),
         delay_steps=0,
         pade=None,
-        noise=np.zeros((0, 4)),
+        levels=np.zeros(4),
         resolution=np.zeros(4),
     )
     law = JacobianTransposePD.from_arm(ARM)
-    state = loop.loop_state(
-        q=np.zeros(4),
-        dq=np.zeros(4),
-        n_links=2,
-        controller_state=np.zeros(0),
-        sensor=sensor,
-        n_y=10,
-    )
     knot_t, knot_p, quintic = straight_segments(Square())  # type: ignore[misc]
     stream = reference_stream(
         knot_t,
@@ -237,28 +239,22 @@ def _loop_arguments():
         sign=1.0,
         singularity_tol=1e-6,
     )
-    return {
-        "model": ARM.arrays,
-        "control": law.cfunc,
-        "params": law.parameters(ARM),
-        "sensor": sensor,
-        "reference": np.zeros((0, 14)),
-        "stream": stream,
-        "dt": 2e-4,
-        "substeps": 1,
-        "torque_limit": np.full(2, np.inf),
-        "max_deflection": np.full(2, 4.5),
-        "state": state,
-        "k0": 0,
-        "k1": 2,
-        "n_steps": 1,
-        "every": 1,
-        "out_q": np.empty((2, 4)),
-        "out_dq": np.empty((2, 4)),
-        "out_tau": np.empty((2, 2)),
-        "out_y": np.empty((2, 10)),
-        "out_r": np.zeros((2, 14)),
-        "out_desired": np.empty((2, 2)),
-        "tip_phi": ARM.point_basis(1, 4.5),
-        "out_tip": np.empty((2, 2)),
-    }
+    inputs = loop.loop_inputs(
+        model=ARM.arrays,
+        params=law.parameters(ARM),
+        sensor=sensor,
+        stream=stream,
+        dt=2e-4,
+        substeps=1,
+        n_steps=1,
+        every=1,
+        torque_limit=np.full(2, np.inf),
+        max_deflection=np.full(2, 4.5),
+        q=np.zeros(4),
+        dq=np.zeros(4),
+        controller_state=np.zeros(0),
+        tip_phi=ARM.point_basis(1, 4.5),
+        reference=None,
+        recorded=2,
+    )
+    return inputs, law

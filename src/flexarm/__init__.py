@@ -54,6 +54,8 @@ _NAMES = {
     "simulate": "sim.closed_loop",
     "simulate_many": "sim.batch",
     "simulate_open_loop": "sim.open_loop",
+    "simulate_prescribed": "sim.prescribed",
+    "SimulationSettings": "sim.settings",
     "sweep": "sweeps.driver",
 }
 
@@ -76,6 +78,8 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run
     from .sim.batch import simulate_many as simulate_many
     from .sim.closed_loop import simulate as simulate
     from .sim.open_loop import simulate_open_loop as simulate_open_loop
+    from .sim.prescribed import simulate_prescribed as simulate_prescribed
     from .sim.results import SimulationError as SimulationError
     from .sim.results import SimulationResult as SimulationResult
+    from .sim.settings import SimulationSettings as SimulationSettings
     from .sweeps.driver import sweep as sweep

@@ -204,10 +204,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     movie = _check_animate(args.animate)
     fmt = figure_format(args, "flexarm simulate", out)
     files = list(result_files(fmt))
-    from ..sim.closed_loop import simulate
 
     try:
-        result = simulate(scenario.arm, **scenario.simulate_kwargs(), progress=None)
+        result = scenario.simulate(progress=None)
         diverged = None
     except (InvalidValueError, InvalidTypeError) as exc:  # e.g. a path outside the workspace
         raise UsageError(f"flexarm simulate: error: {scenario.source}: {exc}") from None

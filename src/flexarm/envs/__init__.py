@@ -8,7 +8,7 @@ num_envs=n, vectorization_mode="vector_entry_point")`` a
 the fields of :class:`EnvConfig`.
 
 * :mod:`flexarm.envs.config` — :class:`EnvConfig`, the episode's definition;
-* :mod:`flexarm.envs.kernel` — the compiled step of a batch of arms;
+* :mod:`flexarm.envs.step` — the compiled step of a batch of arms;
 * :mod:`flexarm.envs.core` — :class:`ArmBatch`, the batch behind both environments;
 * :mod:`flexarm.envs.env` — :class:`FlexibleArmEnv`;
 * :mod:`flexarm.envs.vector` — :class:`FlexibleArmVectorEnv`.

@@ -1,9 +1,9 @@
 """A batch of arms as one object: :class:`ArmBatch`, the machinery behind both environments.
 
 :class:`ArmBatch` builds the compiled step's arrays from an :class:`EnvConfig`
-once (:mod:`flexarm.envs.kernel`), resets chosen arms with their own random
+once (:mod:`flexarm.envs.step`), resets chosen arms with their own random
 generators and steps all of them in one compiled call, optionally split over
-threads (the kernel releases the GIL). The single environment is a batch of
+threads (the step releases the GIL). The single environment is a batch of
 one; the vector environment a batch of many, so that the two share one code
 path. Nothing here needs Gymnasium.
 """
@@ -19,11 +19,9 @@ from numpy.typing import NDArray
 from .._validation import check_int
 from ..errors import InvalidValueError
 from ..model.arrays import make_workspace
-from ..model.kinematics import lever_lengths
-from ..sensing.delays import discretize, pade_state_space
-from ..sim.loop import sensor_arrays
+from ..sensing.channels import channel_arrays
 from .config import EnvConfig
-from .kernel import BatchState, EnvArrays, Scratch, reset_batch, step_batch
+from .step import BatchState, EnvArrays, Scratch, reset_batch, step_batch
 
 __all__ = ["NOISE_BLOCK", "ArmBatch", "observation_bounds"]
 
@@ -58,45 +56,16 @@ def observation_bounds(config: EnvConfig) -> tuple[F64, F64, int]:
 
 def _env_arrays(config: EnvConfig) -> EnvArrays:
     arm = config.arm
-    link, distance, phi = config.sensor.resolve(arm)
     n_links = arm.n_links
-    low, high, n_ch = observation_bounds(config)
-    half = n_ch // 2
-    s = config.sensor
-    levels = np.r_[np.full(half, s.noise_std), np.full(half, s.rate_noise_std)]
-    resolution = np.r_[np.full(half, s.quantization), np.full(half, s.rate_quantization)]
-    h = config.dt / config.substeps
-    delay = config.delay
-    delay_steps, pade = 0, None
-    gain: F64 = np.zeros(0)
-    if delay.delay > 0 and delay.method == "exact":
-        delay_steps = round(delay.delay / h)
-    elif delay.delay > 0:
-        ad, bd, cd, dd = discretize(*pade_state_space(delay.delay, delay.order), h)
-        pade = (ad, bd[:, 0], cd[0], dd[0])
-        gain = np.asarray(np.linalg.solve(np.eye(ad.shape[0]) - ad, bd[:, 0]), dtype=np.float64)
-    rigid = link >= 0 and s.model == "paper"
+    low, high, _ = observation_bounds(config)
+    channels = channel_arrays(arm, config.sensor, config.delay, config.dt / config.substeps)
     lengths = np.asarray(arm.link_lengths, dtype=float)
-    levers = lever_lengths(lengths, link, distance) if rigid else lengths
-    sensed = sensor_arrays(
-        link=link,
-        rigid=rigid,
-        distance=distance,
-        phi=phi,
-        levers=levers,
-        delay_steps=delay_steps,
-        pade=pade,
-        noise=np.zeros((0, n_ch)),
-        resolution=resolution,
-    )
     times = np.arange(config.n_steps + 1) * config.dt
     position, velocity, _ = config.trajectory.evaluate(times)
     last = n_links - 1
     tip_phi = np.asarray(arm.modes[last].shape(float(lengths[last])), dtype=float)[:, 0]
     return EnvArrays(
-        sensor=sensed,
-        levels=np.ascontiguousarray(levels, dtype=float),
-        pade_gain=np.ascontiguousarray(gain, dtype=float),
+        sensor=channels.arrays,
         target=np.ascontiguousarray(np.column_stack([position, velocity]), dtype=float),
         limit=config.limits,
         max_deflection=config.deflection_limits,
@@ -117,7 +86,7 @@ def _env_arrays(config: EnvConfig) -> EnvArrays:
 
 
 class ArmBatch:
-    """``n`` arms of one :class:`EnvConfig`, stepped together by the compiled kernel.
+    """``n`` arms of one :class:`EnvConfig`, stepped together by the compiled step.
 
     Parameters
     ----------
@@ -137,9 +106,10 @@ class ArmBatch:
         arm = config.arm
         self.arrays = _env_arrays(config)
         n_dof, n_links = arm.n_dof, arm.n_links
-        n_ch = self.arrays.levels.shape[0]
-        order = self.arrays.pade_gain.shape[0]
-        noisy = bool(np.any(self.arrays.levels > 0))
+        sensor = self.arrays.sensor
+        n_ch = sensor.levels.shape[0]
+        order = sensor.pade_ad.shape[0]
+        noisy = bool(np.any(sensor.levels > 0))
         self.state = BatchState(
             q=np.zeros((n, n_dof)),
             dq=np.zeros((n, n_dof)),

@@ -3,7 +3,7 @@
 An episode follows a reference path (:class:`flexarm.control.trajectories.Square`
 by default) from rest on its first point; an action is the joint torques (N m),
 held over one control period ``dt`` (zero-order hold) while the compiled RK4
-integrator advances the plant (:mod:`flexarm.envs.kernel`); the observation is
+integrator advances the plant (:mod:`flexarm.envs.step`); the observation is
 what the chosen sensor reads, through its transport delay, noise and
 quantisation, and the reference's current position and velocity; the reward
 penalises the end effector's tracking error and the effort
@@ -36,7 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import InvalidTypeError, InvalidValueError
 from .config import EnvConfig
 from .core import ArmBatch
-from .kernel import DIVERGED, RUNNING, TRUNCATED
+from .step import DIVERGED, RUNNING, TRUNCATED
 
 __all__ = ["FlexibleArmEnv", "config_from", "step_info"]
 
@@ -93,7 +93,7 @@ class FlexibleArmEnv(gym.Env[F64, F64]):
         outside is clipped). Wrap the environment in
         ``gymnasium.wrappers.RescaleAction`` for a ``[-1, 1]`` action.
     observation_space : gymnasium.spaces.Box, shape (n_ch + 4,)
-        :mod:`flexarm.envs.kernel`'s layout: the sensor's ``n_ch`` channels, the
+        :mod:`flexarm.envs.step`'s layout: the sensor's ``n_ch`` channels, the
         reference's position (m) and velocity (m/s); float64.
     """
 

@@ -2,7 +2,7 @@
 
 A ``gymnasium.vector.VectorEnv`` whose ``num_envs`` sub-environments are the
 arms of one :class:`flexarm.envs.core.ArmBatch`: a step is one call of the
-compiled kernel over every arm (split over ``workers`` threads, as the kernel
+compiled step over every arm (split over ``workers`` threads, as the step
 releases the GIL), not a Python loop over environments. Sub-environment ``i``
 behaves exactly as :class:`flexarm.envs.FlexibleArmEnv` reset with seed
 ``seed + i`` (a list of seeds gives each its own), step for step, bit for bit.
@@ -36,7 +36,7 @@ from ..errors import InvalidTypeError, InvalidValueError
 from .config import EnvConfig
 from .core import ArmBatch
 from .env import config_from
-from .kernel import DIVERGED, TRUNCATED
+from .step import DIVERGED, TRUNCATED
 
 __all__ = ["FlexibleArmVectorEnv"]
 

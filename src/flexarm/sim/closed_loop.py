@@ -4,15 +4,20 @@ The controller runs at its sample rate (period ``dt``) with zero-order hold;
 the plant is integrated by fixed-step RK4 with ``substeps`` steps per period;
 the whole loop is compiled (:mod:`flexarm.sim.loop`). ``method="scipy"`` runs
 the same sampled-data loop with SciPy's adaptive ``solve_ivp`` (DOP853) between
-control instants instead, as the accuracy reference for the fixed-step path.
+control instants instead (:mod:`flexarm.sim.scipy_loop`), as the accuracy
+reference for the fixed-step path.
 
-:func:`simulate` is three steps: the reference pipeline
-(:class:`flexarm.sim.references.ReferencePipeline`: trajectory, shaper, delay,
-joint references), the loop driver (:mod:`flexarm.sim.driver`), and the result
-assembly (:func:`flexarm.sim.results.assemble_result`). A path of straight
-segments (the square, lines, waypoints) without shaping, smoothing, feedforward or
-a sensed point short of the end effector is not precomputed: the compiled loop
-computes its reference at each instant with the pipeline's own kernels (the same
+A run is defined by the arm, the law, the path and one
+:class:`~flexarm.sim.settings.SimulationSettings` (validated when made; keywords
+of :func:`simulate` override its fields). :func:`simulate` is three steps: the
+set-up (the reference pipeline, :class:`flexarm.sim.references.ReferencePipeline`:
+trajectory, shaper, delay, joint references; the sensor's arrays; the law's
+design; the loop's inputs, :func:`flexarm.sim.loop.loop_inputs`, built once), the
+run in chunks (:mod:`flexarm.sim.chunks`), and the result assembly
+(:func:`flexarm.sim.results.assemble_result`). A path of straight segments (the
+square, lines, waypoints) without shaping, smoothing, feedforward or a sensed
+point short of the end effector is not precomputed: the compiled loop computes
+its reference at each instant with the pipeline's own kernels (the same
 numbers), and records it with the tip, so that a run's time is the loop's (unless
 the law's design reads the whole reference, as the LQG's does). Tracking errors
 are always measured against the desired, unshaped, undelayed path.
@@ -29,35 +34,31 @@ above. Arms with hubs (motors) tolerate longer periods.
 from __future__ import annotations
 
 import time
+from typing import NamedTuple
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from .._budget import check_memory, check_time
 from .._io import JSONValue
-from .._validation import check_array, check_int, check_option, check_real, check_rng
+from .._validation import check_array, check_rng
 from ..control.controllers import Controller, JacobianTransposePD
 from ..control.feedforward import RigidDynamics
 from ..control.signals import measurement_size
 from ..control.trajectories import Square, Trajectory, check_trajectory
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arm import FlexibleArm
-from ..model.kinematics import lever_lengths
 from ..model.plant import Plant, check_plant
-from ..sensing.delays import DelayModel, discretize, pade_state_space
+from ..sensing.channels import Channels, channel_arrays
+from ..sensing.delays import DelayModel
 from ..sensing.sensors import Sensor, check_sensor
 from ._reference_kernels import OK, ReferenceStream, no_stream, stream_rows
-from .driver import LoopOutputs, StopFlag, run_in_chunks, run_scipy
-from .loop import (
-    REFERENCE_FAILED,
-    SensorArrays,
-    loop_state,
-    prime_delay_line,
-    run,
-    sensor_arrays,
-)
-from .references import BLOCK, PathShaper, ReferencePipeline
+from .chunks import StopFlag, run_in_chunks
+from .loop import REFERENCE_FAILED, Loop, loop_inputs, run
+from .references import BLOCK, ReferencePipeline
 from .results import SimulationError, SimulationResult, assemble_result
+from .scipy_loop import run_scipy
+from .settings import SimulationSettings
 
 __all__ = ["SimulationError", "check_budget", "recorded_instants", "simulate"]
 
@@ -69,26 +70,12 @@ def simulate(
     arm: Plant,
     controller: Controller | None = None,
     trajectory: Trajectory | None = None,
+    settings: SimulationSettings | None = None,
     *,
-    sensor: Sensor | None = None,
-    delay: DelayModel | None = None,
-    delay_reference: bool = False,
-    shaper: PathShaper | None = None,
-    duration: float | None = None,
-    dt: float = 2e-4,
-    substeps: int = 1,
-    torque_limit: float | ArrayLike | None = None,
-    initial_state: ArrayLike | None = None,
-    elbow: str = "positive",
-    max_deflection: float | None = None,
-    method: str = "rk4",
     rng: np.random.Generator | int | None = None,
     progress: bool | None = None,
-    feedforward: bool | None = None,
-    smoothing: float = 0.0,
-    check_sampling: bool = True,
-    record_every: int = 1,
     stop: StopFlag | None = None,
+    **overrides: object,
 ) -> SimulationResult:
     """Simulate ``arm`` under ``controller`` tracking ``trajectory``.
 
@@ -102,66 +89,23 @@ def simulate(
         Anything with ``evaluate(t) -> (position, velocity, acceleration)``
         (arrays (m, 2)), ``duration`` and ``corner_times``; default
         :class:`flexarm.control.trajectories.Square` ().
-    sensor : JointSensor, PointSensor or TipSensor, optional
-        Default :class:`JointSensor` (). With a point short of the end effector
-        (two-link arms), the operational-space command is that point's desired
-        position and velocity (rigid kinematics of the joint references), so
-        that ``e = x_c - x`` compares like with like; the tracking errors are
-        still those of the end effector.
-    delay : DelayModel, optional
-        Transport delay of the sensed signal (default none).
-    delay_reference : bool
-        Delay the reference fed to the control law by the same amount.
-    shaper : Shaper, optional
-        Input shaper applied to the reference path.
-    duration : float, optional
-        Simulated time in s (default: the trajectory's duration).
-    dt : float
-        Control period, s (default 0.2 ms: see the module docstring).
-    substeps : int
-        RK4 steps per control period (>= 1).
-    torque_limit : float or array_like, shape (n_links,), optional
-        Symmetric saturation of each joint torque, N m (default none).
-    initial_state : array_like, shape (2 n_dof,), optional
-        ``(q, dq)`` at t = 0. Default: at rest, undeflected, on the reference's
-        first point (motor angles equal to joint angles).
-    elbow : {"positive", "negative"}
-        Inverse-kinematics branch of the reference.
-    max_deflection : float, optional
-        Tip deflection of any link (m) beyond which the run counts as diverged
-        (default: that link's length).
-    method : {"rk4", "scipy"}
-        Compiled fixed-step loop, or the SciPy adaptive reference (slow).
+    settings : SimulationSettings, optional
+        The run's settings: sensor, delay, shaper, duration, control period,
+        substeps, limits, recording (:class:`~flexarm.sim.settings.SimulationSettings`,
+        validated when made). Default: ``SimulationSettings()``.
     rng : numpy.random.Generator or int, optional
-        Source of sensor noise (seeded runs are reproducible).
+        Source of sensor noise (seeded runs are reproducible); default
+        ``settings.seed``.
     progress : bool, optional
         Show a progress bar on stderr (default: when stderr is a terminal and
         the run is long).
-    feedforward : bool, optional
-        Add the rigid inverse dynamics of the joint references
-        (:class:`flexarm.control.feedforward.RigidDynamics`) to the law's torque
-        (two-link arms). Default: what the controller asks for
-        (``controller.feedforward``; the observer-based law does).
-    smoothing : float
-        Standard deviation (s) of a zero-phase Gaussian smoothing of the path fed
-        to the law (0: none): the reference is known in advance, so a corner
-        taken at constant speed is cut symmetrically with finite acceleration
-        (:func:`flexarm.sim.references.smoothed_path`). Errors are still measured
-        against the unsmoothed path.
-    check_sampling : bool
-        Before running, linearise the loop at the start and refuse a control
-        period ``dt`` at which it is sampled-data unstable, with the pole and the
-        period that would work (:mod:`flexarm.control.sampling`; undelayed,
-        noise-free). False runs it anyway (to watch it diverge).
-    record_every : int
-        Record every ``record_every``-th control instant, and the last one (>= 1;
-        default every instant). The run itself is the same; a long run then fits
-        in bounded memory (the reference is computed as the run goes).
-        The metrics are those of the recorded instants.
     stop : threading.Event or alike, optional
         Checked between chunks of the run (about every 2**15 control instants):
         once set, the run ends with :class:`~flexarm.errors.Cancelled` (how an
         interrupted batch stops its runs promptly).
+    **overrides
+        Fields of :class:`~flexarm.sim.settings.SimulationSettings` that replace
+        those of ``settings`` (``simulate(arm, sensor=TipSensor(), duration=2.0)``).
 
     Returns
     -------
@@ -173,12 +117,14 @@ def simulate(
         If the state diverges; the partial result is attached.
     Cancelled
         If ``stop`` was set before the run's end.
+    InvalidTypeError
+        For a keyword that is not a setting, or an argument of the wrong type.
     InvalidValueError
-        For a bad parameter, a path out of the arm's workspace, a control period
-        at which the loop is sampled-data unstable, or a run that would need
-        more memory or time than the limits allow (``flexarm._budget``:
-        ``FLEXARM_MAX_MEMORY``, ``FLEXARM_MAX_TIME``), which is refused before
-        anything is allocated.
+        For a bad setting for this arm, a path out of the arm's workspace, a
+        control period at which the loop is sampled-data unstable, or a run that
+        would need more memory or time than the limits allow
+        (``flexarm._budget``: ``FLEXARM_MAX_MEMORY``, ``FLEXARM_MAX_TIME``), which is
+        refused before anything is allocated.
     """
     arm = check_plant(arm, _OWNER)
     controller = JacobianTransposePD.from_arm(arm) if controller is None else controller
@@ -189,244 +135,244 @@ def simulate(
         )
     trajectory = Square() if trajectory is None else trajectory
     check_trajectory(trajectory, _OWNER)
-    sensor = check_sensor(sensor, _OWNER)
-    delay = DelayModel.none() if delay is None else delay
-    if not isinstance(delay, DelayModel):
+    if settings is None:
+        settings = SimulationSettings()
+    elif not isinstance(settings, SimulationSettings):
         raise InvalidTypeError(
-            f"The 'delay' parameter of {_OWNER} must be a DelayModel. "
-            f"Got {type(delay).__name__} instead."
+            f"The 'settings' parameter of {_OWNER} must be a SimulationSettings. "
+            f"Got {type(settings).__name__} instead."
         )
-    if shaper is not None and not callable(getattr(shaper, "apply_function", None)):
-        raise InvalidTypeError(
-            f"The 'shaper' parameter of {_OWNER} must be a Shaper (with apply_function). "
-            f"Got {type(shaper).__name__} instead."
-        )
-    dt = check_real(dt, "dt", _OWNER, positive=True)
-    substeps = check_int(substeps, "substeps", _OWNER, minimum=1)
-    duration = float(trajectory.duration) if duration is None else duration
-    duration = check_real(duration, "duration", _OWNER, positive=True)
-    check_option(method, "method", _OWNER, ("rk4", "scipy"))
-    check_option(elbow, "elbow", _OWNER, ("positive", "negative"))
-    if not isinstance(delay_reference, bool):
-        raise InvalidTypeError(
-            f"The 'delay_reference' parameter of {_OWNER} must be a bool. "
-            f"Got {delay_reference!r} instead."
-        )
-    generator = check_rng(rng, _OWNER)
-    for name, flag in (("feedforward", feedforward), ("check_sampling", check_sampling)):
-        if not isinstance(flag, bool) and not (name == "feedforward" and flag is None):
-            raise InvalidTypeError(
-                f"The '{name}' parameter of {_OWNER} must be a bool. Got {flag!r} instead."
-            )
-    use_ff = bool(controller.feedforward) if feedforward is None else feedforward
-    every = check_int(record_every, "record_every", _OWNER, minimum=1)
+    if overrides:
+        settings = settings.replace(**overrides)
+    generator = check_rng(settings.seed if rng is None else rng, _OWNER)
+    setup = _set_up(arm, controller, trajectory, settings)
+    status, k_end, wall = _execute(setup, generator, progress, stop)
+    s, every = settings, settings.record_every
+    info: dict[str, JSONValue] = {
+        "controller": controller.name,
+        "sensor": s.sensor.describe(arm),
+        "delay_s": s.delay.delay,
+        "effective_delay_s": setup.channels.delay,
+        "delay_method": s.delay.method if s.delay.delay > 0 else "none",
+        "delay_reference": s.delay_reference,
+        "shaper": None if s.shaper is None else type(s.shaper).__name__,
+        "dt_s": s.dt,
+        "substeps": s.substeps,
+        "record_every": every,
+        "method": s.method,
+        "feedforward": setup.feedforward,
+        "smoothing_s": s.smoothing,
+        "duration_s": setup.loop.n_steps * s.dt,
+        "n_links": arm.n_links,
+        "n_modes": list(arm.n_modes),
+        "flexible_joints": bool(arm.has_flexible_joints),
+        "corner_times_s": [float(c) for c in trajectory.corner_times],
+        "motion_end_s": float(trajectory.duration),
+        "wall_time_s": wall,
+        "controller_state": setup.loop.state.ctrl_state.tolist(),
+    }
+    # the last row written: the instant the run reached, or the last one recorded before
+    last_row = (k_end + every - 1) // every if status == 0 else k_end // every
+    out = setup.loop.out
+    return assemble_result(
+        arm,
+        t=np.multiply(setup.kept, s.dt, dtype=np.float64),
+        q=out.q,
+        dq=out.dq,
+        tau=out.tau,
+        measurement=out.y,
+        reference=out.r,
+        desired=out.desired,
+        tip=out.tip if out.tip.shape[0] else None,
+        diverged=status != 0,
+        last_row=min(last_row, setup.kept.shape[0] - 1),
+        info=info,
+    )
+
+
+class _Setup(NamedTuple):
+    """A run prepared: the compiled loop's inputs and what drives it from Python."""
+
+    arm: Plant
+    loop: Loop
+    control: object  # the law's compiled function (CFunc)
+    channels: Channels
+    pipeline: ReferencePipeline
+    stream: ReferenceStream | None
+    whole: tuple[F64, F64] | None  # the whole reference (short runs, the SciPy loop)
+    kept: NDArray[np.int64]  # the recorded instants
+    feedforward: bool
+    method: str
+    n_rows: int
+
+
+def _set_up(
+    arm: Plant, controller: Controller, trajectory: Trajectory, s: SimulationSettings
+) -> _Setup:
+    """Everything of a run that depends on the arm: checked, computed, allocated once."""
+    use_ff = bool(controller.feedforward) if s.feedforward is None else s.feedforward
     N, n = arm.n_links, arm.n_dof
-    n_steps = round(duration / dt)
+    duration = float(trajectory.duration) if s.duration is None else s.duration
+    n_steps = round(duration / s.dt)
     if n_steps < 1:
         raise InvalidValueError(
             f"The 'duration' parameter of {_OWNER} must cover at least one control period "
-            f"({dt} s). Got {duration} instead."
+            f"({s.dt} s). Got {duration} instead."
         )
     n_rows = n_steps + 1
-    ny = measurement_size(N, sum(arm.n_modes))
     check_budget(
-        arm, sensor, delay, dt=dt, duration=duration, substeps=substeps, record_every=every
+        arm,
+        s.sensor,
+        s.delay,
+        dt=s.dt,
+        duration=duration,
+        substeps=s.substeps,
+        record_every=s.record_every,
     )
 
     # ------------------------------------------------------------ reference
-    link, distance, _ = sensor.resolve(arm)
+    link, distance, _ = s.sensor.resolve(arm)
     short_of_tip = link >= 0 and not (link == N - 1 and distance == arm.link_lengths[-1])
     pipeline = ReferencePipeline(
         arm,
         trajectory,
-        dt,
+        s.dt,
         n_steps,
-        shaper=shaper,
-        delay=delay.delay if delay_reference else 0.0,
+        shaper=s.shaper,
+        delay=s.delay.delay if s.delay_reference else 0.0,
         point=(link, distance) if short_of_tip else None,
-        elbow=elbow,
+        elbow=s.elbow,
         feedforward=_rigid_dynamics(arm) if use_ff else None,
-        smoothing=check_real(smoothing, "smoothing", _OWNER, nonnegative=True),
+        smoothing=s.smoothing,
         owner=_OWNER,
     )
     whole: tuple[F64, F64] | None = None
     # a path of straight segments is computed in the loop, instant by instant, unless
     # the law's design reads the run's reference
-    streams = method == "rk4" and not _designs_on_reference(controller)
+    streams = s.method == "rk4" and not _designs_on_reference(controller)
     stream = pipeline.stream() if streams else None
     if stream is not None:
-        design_reference = _first_row(stream, pipeline, dt)
-    elif n_rows <= _WHOLE_REFERENCE_ROWS or method == "scipy":
+        design_reference = _first_row(stream, pipeline, s.dt)
+    elif n_rows <= _WHOLE_REFERENCE_ROWS or s.method == "scipy":
         whole = pipeline.rows(0, n_rows)  # short runs: once, for the design and the loop
         design_reference = whole[0]
     else:  # long runs: block by block; a pass first checks the path and samples it
         design_reference = _sampled_reference(pipeline, n_rows)
 
     # ------------------------------------------------------------ initial state, limits
-    if initial_state is None:
+    if s.initial_state is None:
         x0 = np.zeros(2 * n)
         if pipeline.initial_angles is not None:
             x0[:N] = pipeline.initial_angles
             if arm.has_flexible_joints:
                 x0[arm.motor_slice] = x0[:N]
     else:
-        x0 = check_array(initial_state, "initial_state", _OWNER, shape=(2 * n,)).copy()
-    limit = _torque_limit(torque_limit, N)
-    if max_deflection is None:
+        x0 = check_array(s.initial_state, "initial_state", _OWNER, shape=(2 * n,)).copy()
+    limit = _torque_limit(s.torque_limit, N)
+    if s.max_deflection is None:
         max_defl = np.array(arm.link_lengths, dtype=float)
     else:
-        max_defl = np.full(N, check_real(max_deflection, "max_deflection", _OWNER, positive=True))
+        max_defl = np.full(N, s.max_deflection)
 
-    # ------------------------------------------------------------ sensor, state
-    h = dt / substeps
-    sensed, levels, effective_delay = _sensor_arrays(arm, sensor, delay, h)
-    params = np.ascontiguousarray(controller.design(arm, sensor, dt, design_reference), dtype=float)
-    state = loop_state(
+    # ------------------------------------------------------------ the loop's inputs
+    channels = channel_arrays(arm, s.sensor, s.delay, s.dt / s.substeps)
+    params = controller.design(arm, s.sensor, s.dt, design_reference)
+    kept = recorded_instants(0, n_rows, n_steps, s.record_every)
+    # the loop records the tip where the arm gives its basis (else the assembly computes it)
+    basis = getattr(arm, "point_basis", None)
+    record_tip = basis is not None and s.method == "rk4"
+    recorded_reference = None
+    if whole is not None:
+        recorded_reference = tuple(a if s.record_every == 1 else a[kept] for a in whole)
+    loop = loop_inputs(
+        model=arm.arrays,
+        params=np.asarray(params, dtype=float),
+        sensor=channels.arrays,
+        stream=no_stream() if stream is None else stream,
+        dt=s.dt,
+        substeps=s.substeps,
+        n_steps=n_steps,
+        every=s.record_every,
+        torque_limit=limit,
+        max_deflection=max_defl,
         q=x0[:n],
         dq=x0[n:],
-        n_links=N,
         controller_state=np.asarray(controller.initial_state(arm), dtype=float),
-        sensor=sensed,
-        n_y=ny,
+        tip_phi=basis(N - 1, float(arm.link_lengths[-1])) if record_tip and basis else None,
+        reference=recorded_reference,  # type: ignore[arg-type]
+        recorded=kept.shape[0],
     )
-    prime_delay_line(arm.arrays, sensed, state)
-    if check_sampling and isinstance(arm, FlexibleArm):
+    if s.check_sampling and isinstance(arm, FlexibleArm):
         from ..control.sampling import check_sampling as check
 
         verdict = check(
             arm,
             controller,
-            sensor,
+            s.sensor,
             x0[:N],
             design_reference[0],
-            params,
-            state.ctrl_state.copy(),
-            dt,
+            loop.params,
+            loop.state.ctrl_state.copy(),
+            s.dt,
         )
         if verdict.period_too_long:  # (a loop unstable in continuous time diverges anyway)
             raise InvalidValueError(verdict.message(_OWNER, _hubless_note(arm)))
-    kept = recorded_instants(0, n_rows, n_steps, every)
-    n_out = kept.shape[0]
-    out: LoopOutputs = {  # every row up to the last one reached is written
-        "q": np.empty((n_out, n)),
-        "dq": np.empty((n_out, n)),
-        "tau": np.empty((n_out, N)),
-        "measurement": np.empty((n_out, ny)),
-    }
-    # the loop records the tip where the arm gives its basis (else the assembly computes it)
-    basis = getattr(arm, "point_basis", None)
-    tip_phi = np.zeros(0) if basis is None else basis(N - 1, float(arm.link_lengths[-1]))
-    out["tip"] = np.empty((n_out if basis is not None and method == "rk4" else 0, 2))
-    if whole is not None:
-        out["reference"], out["desired"] = (a if every == 1 else a[kept] for a in whole)
-    else:
-        out["reference"], out["desired"] = np.empty((n_out, pipeline.size)), np.empty((n_out, 2))
-
-    # ------------------------------------------------------------ run
-    start = time.perf_counter()
-    if method == "rk4":
-
-        def chunk(k0: int, k1: int) -> tuple[int, int]:
-            if stream is not None:
-                reference = design_reference[:0]  # not read: the loop computes it
-            elif whole is not None:
-                reference = whole[0][k0:k1]
-            else:
-                reference, desired = pipeline.rows(k0, k1)
-                ks = recorded_instants(k0, k1, n_steps, every)
-                rows = (ks + every - 1) // every
-                out["reference"][rows], out["desired"][rows] = reference[ks - k0], desired[ks - k0]
-            noise = sensed.noise
-            if np.any(levels > 0):  # drawn block by block, in order: the same stream at once
-                noise = generator.normal(size=(k1 - k0, levels.shape[0])) * levels
-            first = (k0 + every - 1) // every
-            status, k = run(
-                arm.arrays,
-                controller.cfunc,
-                params,
-                sensed._replace(noise=noise),
-                reference,
-                no_stream() if stream is None else stream,
-                dt,
-                substeps,
-                limit,
-                max_defl,
-                state,
-                k0,
-                k1,
-                n_steps,
-                every,
-                out["q"][first:],
-                out["dq"][first:],
-                out["tau"][first:],
-                out["measurement"][first:],
-                out["reference"][first:],
-                out["desired"][first:],
-                tip_phi,
-                out["tip"][first:],
-            )
-            if status == REFERENCE_FAILED:
-                pipeline.raise_at(k)  # the pipeline's own message for that instant
-            return int(status), int(k)
-
-        status, k_end = run_in_chunks(
-            chunk,
-            n_rows,
-            n_rows * substeps * n,
-            progress,
-            block=None if n_rows <= _WHOLE_REFERENCE_ROWS and stop is None else BLOCK,
-            stop=stop,
-        )
-    else:
-        assert whole is not None
-        if every != 1 or np.any(levels > 0):
-            raise InvalidValueError(
-                f"The 'method' parameter of {_OWNER}='scipy' supports noise-free sensing "
-                "recorded at every control instant only (it is the integrator's accuracy "
-                "reference)."
-            )
-        status, k_end = run_scipy(
-            arm, controller.cfunc, params, sensed, whole[0], dt, limit, max_defl, state, out
-        )
-    info: dict[str, JSONValue] = {
-        "controller": controller.name,
-        "sensor": sensor.describe(arm),
-        "delay_s": delay.delay,
-        "effective_delay_s": effective_delay,
-        "delay_method": delay.method if delay.delay > 0 else "none",
-        "delay_reference": delay_reference,
-        "shaper": None if shaper is None else type(shaper).__name__,
-        "dt_s": dt,
-        "substeps": substeps,
-        "record_every": every,
-        "method": method,
-        "feedforward": use_ff,
-        "smoothing_s": smoothing,
-        "duration_s": n_steps * dt,
-        "n_links": N,
-        "n_modes": list(arm.n_modes),
-        "flexible_joints": bool(arm.has_flexible_joints),
-        "corner_times_s": [float(c) for c in trajectory.corner_times],
-        "motion_end_s": float(trajectory.duration),
-        "wall_time_s": time.perf_counter() - start,
-        "controller_state": state.ctrl_state.tolist(),
-    }
-    # the last row written: the instant the run reached, or the last one recorded before
-    last_row = (k_end + every - 1) // every if status == 0 else k_end // every
-    return assemble_result(
-        arm,
-        t=np.multiply(kept, dt, dtype=np.float64),
-        q=out["q"],
-        dq=out["dq"],
-        tau=out["tau"],
-        measurement=out["measurement"],
-        reference=out["reference"],
-        desired=out["desired"],
-        tip=out["tip"] if out["tip"].shape[0] else None,
-        diverged=status != 0,
-        last_row=min(last_row, n_out - 1),
-        info=info,
+    return _Setup(
+        arm=arm,
+        loop=loop,
+        control=controller.cfunc,
+        channels=channels,
+        pipeline=pipeline,
+        stream=stream,
+        whole=whole,
+        kept=kept,
+        feedforward=use_ff,
+        method=s.method,
+        n_rows=n_rows,
     )
+
+
+def _execute(
+    setup: _Setup, generator: np.random.Generator, progress: bool | None, stop: StopFlag | None
+) -> tuple[int, int, float]:
+    """Run the prepared loop: ``(status, last instant reached, wall time in s)``."""
+    loop, pipeline, whole, stream = setup.loop, setup.pipeline, setup.whole, setup.stream
+    n_rows, n_steps, every = setup.n_rows, loop.n_steps, loop.every
+    n_ch, no_noise = setup.channels.n_ch, np.zeros((0, setup.channels.n_ch))
+    start = time.perf_counter()
+    if setup.method == "scipy":
+        assert whole is not None
+        status, k_end = run_scipy(setup.arm, loop, setup.control, whole[0])  # type: ignore[arg-type]
+        return status, k_end, time.perf_counter() - start
+
+    def chunk(k0: int, k1: int) -> tuple[int, int]:
+        if stream is not None:
+            reference = whole_or_empty  # not read: the loop computes it
+        elif whole is not None:
+            reference = whole[0][k0:k1]
+        else:
+            reference, desired = pipeline.rows(k0, k1)
+            ks = recorded_instants(k0, k1, n_steps, every)
+            rows = (ks + every - 1) // every
+            loop.out.r[rows], loop.out.desired[rows] = reference[ks - k0], desired[ks - k0]
+        noise = no_noise
+        if setup.channels.noisy:  # drawn block by block, in order: the same stream at once
+            noise = generator.normal(size=(k1 - k0, n_ch))
+        status, k = run(loop, setup.control, reference, noise, k0, k1)  # type: ignore[arg-type]
+        if status == REFERENCE_FAILED:
+            pipeline.raise_at(k)  # the pipeline's own message for that instant
+        return int(status), int(k)
+
+    whole_or_empty = np.zeros((0, pipeline.size))
+    status, k_end = run_in_chunks(
+        chunk,
+        n_rows,
+        n_rows * loop.substeps * loop.state.q.shape[0],
+        progress,
+        block=None if n_rows <= _WHOLE_REFERENCE_ROWS and stop is None else BLOCK,
+        stop=stop,
+    )
+    return status, k_end, time.perf_counter() - start
 
 
 _WHOLE_REFERENCE_ROWS = 4 * BLOCK
@@ -554,56 +500,20 @@ def check_budget(
     )
 
 
-def _torque_limit(torque_limit: float | ArrayLike | None, n_links: int) -> F64:
-    """Per-joint saturation (N m): infinite by default; scalar broadcast; > 0."""
+def _torque_limit(torque_limit: float | tuple[float, ...] | None, n_links: int) -> F64:
+    """Per-joint saturation (N m; the settings checked the values): infinite by
+    default, one value broadcast, else one per joint."""
     if torque_limit is None:
         return np.full(n_links, np.inf)
-    limit = check_array(torque_limit, "torque_limit", _OWNER, finite=False)
-    if limit.ndim == 0:
-        limit = np.broadcast_to(limit, (n_links,)).astype(float).copy()
-    if limit.shape != (n_links,) or np.any(np.isnan(limit)) or np.any(limit <= 0):
+    if isinstance(torque_limit, float):
+        return np.full(n_links, torque_limit)
+    limit = np.array(torque_limit, dtype=float)
+    if limit.shape != (n_links,):
         raise InvalidValueError(
-            f"The 'torque_limit' parameter of {_OWNER} must be > 0, scalar or of shape "
-            f"({n_links},). Got {torque_limit!r} instead."
+            f"The 'torque_limit' parameter of {_OWNER} must be a scalar or one per joint "
+            f"({n_links}). Got {torque_limit!r} instead."
         )
-    return np.asarray(limit, dtype=float)
-
-
-def _sensor_arrays(
-    arm: Plant, sensor: Sensor, delay: DelayModel, h: float
-) -> tuple[SensorArrays, F64, float]:
-    """The sensor and its delay (at substep resolution ``h``) as plain arrays (no
-    noise rows yet), the noise levels of its channels, and the delay actually
-    realised (s)."""
-    link, distance, phi = sensor.resolve(arm)
-    n_links = arm.n_links
-    n_ch = 2 * n_links if link < 0 else 4
-    half = n_ch // 2
-    levels = np.r_[np.full(half, sensor.noise_std), np.full(half, sensor.rate_noise_std)]
-    resolution = np.r_[np.full(half, sensor.quantization), np.full(half, sensor.rate_quantization)]
-    delay_steps, pade, effective = 0, None, 0.0
-    if delay.delay > 0:
-        if delay.method == "exact":
-            delay_steps = round(delay.delay / h)
-            effective = delay_steps * h
-        else:
-            ad, bd, cd, dd = discretize(*pade_state_space(delay.delay, delay.order), h)
-            pade = (ad, bd[:, 0], cd[0], dd[0])
-            effective = delay.delay
-    rigid = link >= 0 and sensor.model == "paper"
-    lengths = np.asarray(arm.link_lengths, dtype=float)
-    arrays = sensor_arrays(
-        link=link,
-        rigid=rigid,
-        distance=distance,
-        phi=phi,
-        levers=lever_lengths(lengths, link, distance) if rigid else lengths,
-        delay_steps=delay_steps,
-        pade=pade,
-        noise=np.zeros((0, n_ch)),  # drawn block by block as the run goes
-        resolution=resolution,
-    )
-    return arrays, levels, effective
+    return limit
 
 
 def _hubless_note(arm: FlexibleArm) -> str:

@@ -2,18 +2,17 @@
 
 One Numba function runs a whole simulation (or a chunk of one) without
 returning to Python: at every control instant ``t_k = k dt`` it forms the
-measurement (sensor, delay, noise, quantisation), calls the controller through
-its C function pointer, saturates and holds the torque, then integrates the
-plant over ``[t_k, t_k + dt]`` with ``substeps`` fixed RK4 steps
-(:mod:`flexarm.sim.integrator`). Delays act at substep resolution: the exact
-delay is a ring buffer of the sensed signal (delay rounded to whole substeps),
-the Padé delay a discrete state-space filter discretised exactly over one
-substep (zero-order hold on its input).
+measurement (the sensor's raw signal, delay, noise and quantisation:
+:mod:`flexarm.sensing.channels`), calls the controller through its C function
+pointer, saturates and holds the torque, then integrates the plant over
+``[t_k, t_k + dt]`` with ``substeps`` fixed RK4 steps
+(:mod:`flexarm.sim.integrator`).
 
-Everything is plain arrays, built by one factory each (:func:`sensor_arrays`,
-:func:`loop_state`), by keyword; :func:`flexarm.simulate` prepares
-them. The measurement and reference layouts are those of
-:mod:`flexarm.control.signals`.
+Everything the loop reads and writes is one :class:`Loop` of plain arrays,
+built in one place (:func:`loop_inputs`, by keyword); what changes from chunk to
+chunk (the reference rows and the noise draws of the chunk's instants) is passed
+beside it. :func:`flexarm.simulate` prepares it. The measurement and reference
+layouts are those of :mod:`flexarm.control.signals`.
 """
 
 from __future__ import annotations
@@ -39,70 +38,141 @@ from ..model.arrays import LEN, ArmArrays, Workspace, make_workspace
 from ..model.dynamics_points import _point_state
 from ..model.dynamics_two_links import _is_two_links_one_mode
 from ..model.kernel_checks import check_model, check_vector, check_workspace
+from ..sensing import _channels
+from ..sensing.channels import SensorArrays, check_sensor_arrays
 from ._reference_kernels import ReferenceStream, stream_row
+from .chunks import DIVERGED, OK
 from .integrator import _diverged, _rk4_step, _rk4_step_two_links_one_mode
-from .sensed import (
-    SensorArrays,
-    _collocated,
-    _rigid_chain_point,
-    _sense,
-    check_sensor_arrays,
-    sense,
-    sensor_arrays,
-)
 
 __all__ = [
     "DIVERGED",
     "OK",
     "REFERENCE_FAILED",
+    "Loop",
+    "LoopOutputs",
     "LoopState",
-    "SensorArrays",
-    "loop_state",
-    "prime_delay_line",
+    "loop_inputs",
     "run",
-    "sense",
-    "sensor_arrays",
 ]
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 
-OK, DIVERGED, REFERENCE_FAILED = 0, 1, 2
+REFERENCE_FAILED = 2
+"""Status of a chunk whose streamed reference failed (beside OK and DIVERGED)."""
 
 
 class LoopState(NamedTuple):
-    """Everything that carries over between chunks (updated in place; build with
-    :func:`loop_state`)."""
+    """Everything that carries over between chunks (updated in place)."""
 
     q: F64  # (n,)
     dq: F64  # (n,)
     tau: F64  # (N,) held torque
     ctrl_state: F64  # (s,)
-    buffer: F64  # (delay_steps + 1, n_channels) ring of sensed signals
+    buffer: F64  # (delay_steps + 1, n_ch) ring of sensed signals
     cursor: I64  # (1,) substeps integrated so far
-    pade_x: F64  # (n_channels, p) filter states
+    pade_x: F64  # (n_ch, p) filter states
     scratch: F64  # (6, n) RK4 stages
     ws: Workspace  # dynamics scratch
-    signals: F64  # (2 n_channels + n_y + max(p, 1),) signal scratch
+    signals: F64  # (2 n_ch + n_y + max(p, 1),) signal scratch
     reference: F64  # (reference_size,) a streamed reference vector (feedforward 0)
     desired: F64  # (2,) a streamed desired point
 
 
-def loop_state(
+class LoopOutputs(NamedTuple):
+    """The recorded rows: instant ``k`` goes to row ``ceil(k / every)``.
+
+    ``q, dq`` (rows, n_dof); ``tau`` (rows, N) N m; ``y`` (rows, n_y) the
+    measurement; ``r`` (rows, reference_size) and ``desired`` (rows, 2) m, written
+    by the loop only for a streamed reference (else (0, .) or filled beforehand);
+    ``tip`` (rows, 2) m, the end effector, or (0, 2) when not recorded here.
+    """
+
+    q: F64
+    dq: F64
+    tau: F64
+    y: F64
+    r: F64
+    desired: F64
+    tip: F64
+
+
+class Loop(NamedTuple):
+    """What the compiled loop reads and writes over a run (build with :func:`loop_inputs`).
+
+    Attributes
+    ----------
+    model : ArmArrays
+        The plant.
+    params : ndarray
+        The control law's parameters (``Controller.design``).
+    sensor : SensorArrays
+        The sensor and its delay.
+    stream : ReferenceStream
+        A reference computed at each instant (``no_stream()``: rows are passed).
+    dt : float
+        Control period, s.
+    substeps, n_steps, every : int
+        RK4 steps per period; periods in the run (instants ``0..n_steps``); record
+        every ``every``-th instant and the last.
+    torque_limit, max_deflection : ndarray, shape (N,)
+        Saturation of each joint torque (N m) and the tip deflection of each link
+        counted as divergence (m).
+    tip_phi : ndarray
+        The last link's point basis at its tip (FlexibleArm.point_basis), when the
+        tip is recorded.
+    state : LoopState
+    out : LoopOutputs
+    """
+
+    model: ArmArrays
+    params: F64
+    sensor: SensorArrays
+    stream: ReferenceStream
+    dt: float
+    substeps: int
+    n_steps: int
+    every: int
+    torque_limit: F64
+    max_deflection: F64
+    tip_phi: F64
+    state: LoopState
+    out: LoopOutputs
+
+
+def loop_inputs(
     *,
+    model: ArmArrays,
+    params: F64,
+    sensor: SensorArrays,
+    stream: ReferenceStream,
+    dt: float,
+    substeps: int,
+    n_steps: int,
+    every: int,
+    torque_limit: F64,
+    max_deflection: F64,
     q: F64,
     dq: F64,
-    n_links: int,
     controller_state: F64,
-    sensor: SensorArrays,
-    n_y: int,
-) -> LoopState:
-    """A fresh :class:`LoopState` for the initial ``q, dq`` (copied), a controller's
-    initial state (copied), the sensor's arrays and a measurement of ``n_y``."""
-    n = q.shape[0]
+    tip_phi: F64 | None,
+    reference: tuple[F64, F64] | None,
+    recorded: int,
+) -> Loop:
+    """The one way to build a :class:`Loop`: the state at ``q, dq`` (copied) with the
+    controller's initial state and the delay line at steady state, and output rows
+    for ``recorded`` instants.
+
+    ``tip_phi`` (the last link's point basis at its tip) records the end effector
+    in the loop; ``reference``, the reference rows and desired points already
+    recorded ``(r, desired)``, is used as the outputs as it is (else the loop or the
+    caller writes them).
+    """
+    n, n_links = q.shape[0], model.link.shape[0]
+    n_y = measurement_size(n_links, int(model.mode_start[n_links]) - n_links)
     n_ch = sensor.resolution.shape[0]
     order = sensor.pade_ad.shape[0]
-    return LoopState(
+    state = LoopState(
         q=np.array(q, dtype=np.float64),
         dq=np.array(dq, dtype=np.float64),
         tau=np.zeros(n_links),
@@ -116,129 +186,108 @@ def loop_state(
         reference=np.zeros(reference_size(n_links)),
         desired=np.zeros(2),
     )
-
-
-def prime_delay_line(model: ArmArrays, sensor: SensorArrays, state: LoopState) -> None:
-    """Start the delay line at steady state on the initial sensed signal."""
-    raw = np.zeros(state.buffer.shape[1])
-    _sense(state.q, state.dq, model, sensor, raw)
-    state.buffer[:] = raw
-    order = sensor.pade_ad.shape[0]
-    if order:
-        # discrete steady state: x = (I - Ad)^-1 Bd u
-        gain = np.linalg.solve(np.eye(order) - sensor.pade_ad, sensor.pade_bd)
-        state.pade_x[:] = np.outer(raw, gain)
+    _channels.prime(
+        state.q, state.dq, model, sensor, state.buffer, state.pade_x, state.signals[:n_ch]
+    )
+    if reference is None:
+        r, desired = np.empty((recorded, reference_size(n_links))), np.empty((recorded, 2))
+    else:
+        r, desired = reference
+    out = LoopOutputs(  # every row up to the last one reached is written
+        q=np.empty((recorded, n)),
+        dq=np.empty((recorded, n)),
+        tau=np.empty((recorded, n_links)),
+        y=np.empty((recorded, n_y)),
+        r=r,
+        desired=desired,
+        tip=np.empty((recorded if tip_phi is not None else 0, 2)),
+    )
+    return Loop(
+        model=model,
+        params=np.ascontiguousarray(params, dtype=np.float64),
+        sensor=sensor,
+        stream=stream,
+        dt=float(dt),
+        substeps=int(substeps),
+        n_steps=int(n_steps),
+        every=int(every),
+        torque_limit=np.ascontiguousarray(torque_limit, dtype=np.float64),
+        max_deflection=np.ascontiguousarray(max_deflection, dtype=np.float64),
+        tip_phi=np.zeros(0) if tip_phi is None else np.ascontiguousarray(tip_phi, dtype=float),
+        state=state,
+        out=out,
+    )
 
 
 @njit_runtime_free(cache=True, nogil=True)
 def _run(
-    model: ArmArrays,
+    loop: Loop,
     control: CFunc,  # see flexarm.control.controllers.CONTROL_SIGNATURE
-    params: F64,
-    sensor: SensorArrays,
     reference: F64,
-    stream: ReferenceStream,
-    dt: float,
-    substeps: int,
-    torque_limit: F64,
-    max_deflection: F64,
-    state: LoopState,
+    noise: F64,
     k0: int,
     k1: int,
-    n_steps: int,
-    every: int,
-    out_q: F64,
-    out_dq: F64,
-    out_tau: F64,
-    out_y: F64,
-    out_r: F64,
-    out_desired: F64,
-    tip_phi: F64,
-    out_tip: F64,
 ) -> tuple[int, int]:  # pragma: no cover - compiled
-    """Advance the loop over control instants ``k0 <= k < k1`` of a run of
-    ``n_steps`` periods (measure at each ``k``, then act and integrate to ``k + 1``
-    unless ``k == n_steps``).
+    """Advance the loop over control instants ``k0 <= k < k1`` (measure at each ``k``,
+    then act and integrate to ``k + 1`` unless ``k == n_steps``).
 
-    ``reference`` and ``sensor.noise`` (if any) hold the rows of instants
-    ``k0 <= k < k1``: row ``k - k0``. With ``stream`` on, the reference is computed
-    here at each instant instead (``reference`` is not read) and recorded with the
-    desired point in ``out_r`` and ``out_desired`` (not written otherwise). With
-    rows in ``out_tip``, the end effector's position (deflected; ``tip_phi`` the
-    last link's basis at its tip, FlexibleArm.point_basis) is recorded there. The
-    outputs record every ``every``-th instant and the last one (``k % every == 0``
-    or ``k == n_steps``): instant ``k`` goes to row
-    ``ceil(k / every) - ceil(k0 / every)``.
+    ``reference`` and ``noise`` (standard normal draws, or no rows for a noise-free
+    sensor) hold the rows of instants ``k0 <= k < k1``: row ``k - k0``. With the
+    loop's stream on, the reference is computed here at each instant instead
+    (``reference`` is not read) and recorded with the desired point in ``out.r``
+    and ``out.desired`` (not written otherwise). With rows in ``out.tip``, the end
+    effector's position (deflected) is recorded there.
 
     Returns ``(status, k)``: status 0 and ``k1`` when done, 1 and the last instant
     whose state was finite when the state diverged (non-finite, rates above 1e12,
     or a link's tip deflection above ``max_deflection``), 2 and the instant whose
-    streamed reference failed (out of reach or singular: the pipeline's
-    ``rows`` at that instant says how).
+    streamed reference failed (out of reach or singular: the pipeline's ``rows``
+    at that instant says how).
     """
+    model, sensor, state, out = loop.model, loop.sensor, loop.state, loop.out
+    params, substeps, n_steps, every = loop.params, loop.substeps, loop.n_steps, loop.every
+    dt = loop.dt
     n = state.q.shape[0]
     n_links = model.link.shape[0]
     ms = model.mode_start
     n_modes = ms[n_links] - n_links
-    row0 = (k0 + every - 1) // every
     h = dt / substeps
     ws = state.ws
     q, dq, tau = state.q, state.dq, state.tau
     n_ch = state.buffer.shape[1]
-    n_y = out_y.shape[1]
+    n_y = out.y.shape[1]
     sig = state.signals  # views into preallocated scratch: no allocation here
     raw = sig[0:n_ch]
     delayed = sig[n_ch : 2 * n_ch]
     y = sig[2 * n_ch : 2 * n_ch + n_y]
     x_new = sig[2 * n_ch + n_y :]
-    n_buf = state.buffer.shape[0]
-    order = sensor.pade_ad.shape[0]
-    has_noise = sensor.noise.shape[0] > 0
+    noisy = noise.shape[0] > 0
     joint_sensor = sensor.link[0] < 0
     two_links_one_mode = _is_two_links_one_mode(model)
     o_angle, o_rate = y_angles(n_links), y_rates(n_links)
     o_point, o_modes = y_point(n_links), y_modes(n_links)
     o_ff = r_feedforward(n_links)
-    streamed = stream.spec[0] != 0.0
-    record_tip = out_tip.shape[0] > 0
+    streamed = loop.stream.spec[0] != 0.0
+    record_tip = out.tip.shape[0] > 0
     last_link = n_links - 1
     tip_distance = model.link[last_link, LEN]
     for k in range(k0, k1):
         if streamed:
-            code, _ = stream_row(stream, k * dt, state.reference, state.desired)
+            code, _ = stream_row(loop.stream, k * dt, state.reference, state.desired)
             if code != OK:
                 return REFERENCE_FAILED, k
         # ---- measure: the delayed sensed signal, then noise and quantisation
-        _sense(q, dq, model, sensor, raw)
-        cur = state.cursor[0]
-        if n_buf > 1:
-            src = cur - (n_buf - 1)
-            if src < 0:
-                src = 0
-            for c in range(n_ch):
-                delayed[c] = state.buffer[src % n_buf, c]
-        elif order > 0:
-            for c in range(n_ch):
-                acc = sensor.pade_dd[0] * raw[c]
-                for j in range(order):
-                    acc += sensor.pade_cd[j] * state.pade_x[c, j]
-                delayed[c] = acc
+        _channels.sense(q, dq, model, sensor, raw)
+        _channels.delayed_signal(sensor, state.buffer, state.pade_x, state.cursor[0], raw, delayed)
+        if noisy:
+            _channels.corrupt(sensor, True, noise[k - k0], delayed)
         else:
-            for c in range(n_ch):
-                delayed[c] = raw[c]
-        for c in range(n_ch):
-            v = delayed[c]
-            if has_noise:
-                v += sensor.noise[k - k0, c]
-            res = sensor.resolution[c]
-            if res > 0.0:
-                v = np.round(v / res) * res
-            delayed[c] = v
+            _channels.corrupt(sensor, False, raw, delayed)
         if joint_sensor:  # the measured angles, and the sensor's point from them
             for i in range(n_links):
                 y[o_angle + i] = delayed[i]
                 y[o_rate + i] = delayed[n_links + i]
-            _rigid_chain_point(
+            _channels.rigid_chain_point(
                 sensor.levers,
                 delayed[:n_links],
                 delayed[n_links : 2 * n_links],
@@ -246,7 +295,7 @@ def _run(
             )
         else:
             for i in range(n_links):
-                a, r = _collocated(q, dq, model, i, n_links)
+                a, r = _channels.collocated(q, dq, model, i, n_links)
                 y[o_angle + i] = a
                 y[o_rate + i] = r
             for c in range(4):
@@ -255,25 +304,25 @@ def _run(
             y[o_modes + j] = q[n_links + j]
         # ---- record
         record = k % every == 0 or k == n_steps
-        row = (k + every - 1) // every - row0
+        row = (k + every - 1) // every
         if record:
             for r in range(n):
-                out_q[row, r] = q[r]
-                out_dq[row, r] = dq[r]
+                out.q[row, r] = q[r]
+                out.dq[row, r] = dq[r]
             for c in range(y.shape[0]):
-                out_y[row, c] = y[c]
+                out.y[row, c] = y[c]
             if record_tip:
-                px, py, _, _ = _point_state(q, q, model, last_link, tip_distance, tip_phi)
-                out_tip[row, 0] = px
-                out_tip[row, 1] = py
+                px, py, _, _ = _point_state(q, q, model, last_link, tip_distance, loop.tip_phi)
+                out.tip[row, 0] = px
+                out.tip[row, 1] = py
             if streamed:
                 for c in range(state.reference.shape[0]):
-                    out_r[row, c] = state.reference[c]
-                out_desired[row, 0] = state.desired[0]
-                out_desired[row, 1] = state.desired[1]
+                    out.r[row, c] = state.reference[c]
+                out.desired[row, 0] = state.desired[0]
+                out.desired[row, 1] = state.desired[1]
         if k == n_steps:
             for i in range(n_links):
-                out_tau[row, i] = tau[i]
+                out.tau[row, i] = tau[i]
             return OK, k1
         # ---- act: control law, saturation, zero-order hold
         rk = state.reference if streamed else reference[k - k0]
@@ -292,92 +341,76 @@ def _run(
         )
         for i in range(n_links):
             tau[i] += rk[o_ff + i]  # feedforward (zero unless asked for)
-            lim = torque_limit[i]
+            lim = loop.torque_limit[i]
             if tau[i] > lim:
                 tau[i] = lim
             elif tau[i] < -lim:
                 tau[i] = -lim
             if record:
-                out_tau[row, i] = tau[i]
+                out.tau[row, i] = tau[i]
         # ---- integrate to t_{k+1}
         for _ in range(substeps):
-            if order > 0:  # Padé filter: x <- Ad x + Bd u over this substep
-                _sense(q, dq, model, sensor, raw)
-                for c in range(n_ch):
-                    for j in range(order):
-                        acc = sensor.pade_bd[j] * raw[c]
-                        for i2 in range(order):
-                            acc += sensor.pade_ad[j, i2] * state.pade_x[c, i2]
-                        x_new[j] = acc
-                    for j in range(order):
-                        state.pade_x[c, j] = x_new[j]
+            _channels.advance_pade(q, dq, model, sensor, state.pade_x, raw, x_new)
             if two_links_one_mode:
                 _rk4_step_two_links_one_mode(q, dq, tau, tau, tau, h, model)
             else:
                 _rk4_step(q, dq, tau, tau, tau, h, model, ws, state.scratch)
             state.cursor[0] += 1
-            if n_buf > 1:
-                _sense(q, dq, model, sensor, raw)
-                slot = state.cursor[0] % n_buf
-                for c in range(n_ch):
-                    state.buffer[slot, c] = raw[c]
-            if _diverged(q, dq, model, max_deflection):
+            _channels.record_sample(q, dq, model, sensor, state.buffer, state.cursor[0], raw)
+            if _diverged(q, dq, model, loop.max_deflection):
                 return DIVERGED, k
     return OK, k1
 
 
-# ------------------------------------------------------------------ checked public faces
-# From Python, run and sense check every array they will index (a short output
-# would be written past its end); inside compiled code they are the kernels.
+# ------------------------------------------------------------------ checked public face
 def run(
-    model: ArmArrays,
-    control: CFunc,
-    params: F64,
-    sensor: SensorArrays,
-    reference: F64,
-    stream: ReferenceStream,
-    dt: float,
-    substeps: int,
-    torque_limit: F64,
-    max_deflection: F64,
-    state: LoopState,
-    k0: int,
-    k1: int,
-    n_steps: int,
-    every: int,
-    out_q: F64,
-    out_dq: F64,
-    out_tau: F64,
-    out_y: F64,
-    out_r: F64,
-    out_desired: F64,
-    tip_phi: F64,
-    out_tip: F64,
+    loop: Loop, control: CFunc, reference: F64, noise: F64, k0: int, k1: int
 ) -> tuple[int, int]:
-    """The compiled loop (``_run``: its docstring has the semantics) over
-    ``k0 <= k < k1``, every array it will index checked first."""
+    """The compiled loop over ``k0 <= k < k1`` (``_run``: its docstring has the
+    semantics), every array it will index checked first (a short output would be
+    written past its end).
+
+    Parameters
+    ----------
+    loop : Loop
+        From :func:`loop_inputs`.
+    control : CFunc
+        The law's compiled function (``Controller.cfunc``).
+    reference : ndarray, shape (k1 - k0, reference_size)
+        The reference rows of the chunk's instants (not read when streamed:
+        then any (0, reference_size) array).
+    noise : ndarray, shape (k1 - k0, n_ch) or (0, n_ch)
+        Standard normal draws of the chunk's instants, or none.
+    k0, k1 : int
+        The chunk's instants, ``0 <= k0 <= k1 <= n_steps + 1``.
+    """
     owner = "run"
+    if not isinstance(loop, Loop):
+        raise InvalidValueError(f"The 'loop' parameter of {owner} must be a Loop (loop_inputs).")
+    model, state, out = loop.model, loop.state, loop.out
     n_links, n = check_model(model, owner)
-    n_ch, p = check_sensor_arrays(sensor, model, owner)
-    k0, k1, n_steps, every, substeps = (int(v) for v in (k0, k1, n_steps, every, substeps))
-    if not (0 <= k0 <= k1 <= n_steps + 1 and every >= 1 and substeps >= 1 and dt > 0):
+    n_ch, p = check_sensor_arrays(loop.sensor, model, owner)
+    k0, k1, n_steps, every = int(k0), int(k1), loop.n_steps, loop.every
+    if not (0 <= k0 <= k1 <= n_steps + 1 and every >= 1 and loop.substeps >= 1 and loop.dt > 0):
         raise InvalidValueError(
             f"The 'k0', 'k1', 'n_steps', 'every', 'substeps' and 'dt' parameters of {owner} "
             "must satisfy 0 <= k0 <= k1 <= n_steps + 1, every >= 1, substeps >= 1, dt > 0. "
-            f"Got {k0}, {k1}, {n_steps}, {every}, {substeps}, {dt} instead."
+            f"Got {k0}, {k1}, {n_steps}, {every}, {loop.substeps}, {loop.dt} instead."
         )
     acting = max(0, min(k1, n_steps) - k0)  # instants whose reference the law reads
+    params = loop.params
     check_vector(params, "params", owner, (params.shape[0],) if params.ndim == 1 else (-1,))
-    if sensor.noise.shape[0] and sensor.noise.shape[0] < k1 - k0:
+    if noise.ndim != 2 or noise.shape[1] != n_ch or 0 < noise.shape[0] < k1 - k0:
         raise InvalidValueError(
-            f"The 'sensor.noise' parameter of {owner} must have a row per instant "
-            f"({k1 - k0}). Got {sensor.noise.shape[0]} rows instead."
+            f"The 'noise' parameter of {owner} must have {n_ch} columns and a row per instant "
+            f"({k1 - k0}) or none. Got shape {noise.shape} instead."
         )
-    streamed = _check_stream(stream, n_links, owner)
+    check_vector(noise, "noise", owner, noise.shape)
+    streamed = _check_stream(loop.stream, n_links, owner)
     if not streamed:
         _rows_at_least(reference, "reference", owner, acting, reference_size(n_links), False)
-    check_vector(torque_limit, "torque_limit", owner, (n_links,))
-    check_vector(max_deflection, "max_deflection", owner, (n_links,))
+    check_vector(loop.torque_limit, "torque_limit", owner, (n_links,))
+    check_vector(loop.max_deflection, "max_deflection", owner, (n_links,))
     if not isinstance(state, LoopState):
         raise InvalidValueError(f"The 'state' parameter of {owner} must be a LoopState.")
     n_y = measurement_size(n_links, int(model.mode_start[-1]) - n_links)
@@ -385,7 +418,7 @@ def run(
     check_vector(state.dq, "state.dq", owner, (n,), writable=True)
     check_vector(state.tau, "state.tau", owner, (n_links,), writable=True)
     check_vector(state.ctrl_state, "state.ctrl_state", owner, state.ctrl_state.shape, writable=True)
-    delay = int(sensor.delay_steps[0])
+    delay = int(loop.sensor.delay_steps[0])
     check_vector(state.buffer, "state.buffer", owner, (delay + 1, n_ch), writable=True)
     check_vector(state.cursor, "state.cursor", owner, (1,), writable=True, dtype=np.int64)
     check_vector(state.pade_x, "state.pade_x", owner, (n_ch, p), writable=True)
@@ -398,55 +431,29 @@ def run(
         state.reference, "state.reference", owner, (reference_size(n_links),), writable=True
     )
     check_vector(state.desired, "state.desired", owner, (2,), writable=True)
-    recorded = (
-        (max(k1, k0) + every - 1) // every
-        - (k0 + every - 1) // every
-        + (1 if k0 <= n_steps < k1 and n_steps % every else 0)
-    )
-    for name, out, width in (
-        ("out_q", out_q, n),
-        ("out_dq", out_dq, n),
-        ("out_tau", out_tau, n_links),
-        ("out_y", out_y, n_y),
+    last = min(k1, n_steps + 1) - 1  # the last instant the chunk may record
+    rows = (last + every - 1) // every + 1 if last >= k0 else 0
+    for name, arr, width in (
+        ("out.q", out.q, n),
+        ("out.dq", out.dq, n),
+        ("out.tau", out.tau, n_links),
+        ("out.y", out.y, n_y),
     ):
-        _rows_at_least(out, name, owner, recorded, width, True)
+        _rows_at_least(arr, name, owner, rows, width, True)
     if streamed:
-        _rows_at_least(out_r, "out_r", owner, recorded, reference_size(n_links), True)
-        _rows_at_least(out_desired, "out_desired", owner, recorded, 2, True)
+        _rows_at_least(out.r, "out.r", owner, rows, reference_size(n_links), True)
+        _rows_at_least(out.desired, "out.desired", owner, rows, 2, True)
+    tip_phi = loop.tip_phi
     check_vector(tip_phi, "tip_phi", owner, np.shape(tip_phi))
-    if not (isinstance(out_tip, np.ndarray) and out_tip.ndim == 2 and out_tip.shape[0] == 0):
+    if not (isinstance(out.tip, np.ndarray) and out.tip.ndim == 2 and out.tip.shape[0] == 0):
         modes = int(model.mode_start[n_links] - model.mode_start[n_links - 1])
         if tip_phi.shape not in ((modes,), (modes + modes * modes,)):
             raise InvalidValueError(
                 f"The 'tip_phi' parameter of {owner} must fit the last link's {modes} modes. "
                 f"Got shape {tip_phi.shape} instead."
             )
-        _rows_at_least(out_tip, "out_tip", owner, recorded, 2, True)
-    status, k = _run(
-        model,
-        control,
-        params,
-        sensor,
-        reference,
-        stream,
-        dt,
-        substeps,
-        torque_limit,
-        max_deflection,
-        state,
-        k0,
-        k1,
-        n_steps,
-        every,
-        out_q,
-        out_dq,
-        out_tau,
-        out_y,
-        out_r,
-        out_desired,
-        tip_phi,
-        out_tip,
-    )
+        _rows_at_least(out.tip, "out.tip", owner, rows, 2, True)
+    status, k = _run(loop, control, reference, noise, k0, k1)
     return int(status), int(k)
 
 

@@ -33,9 +33,8 @@ from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arrays import ArmArrays, Workspace, make_workspace
 from ..model.dynamics_two_links import _is_two_links_one_mode
 from ..model.plant import Plant, check_plant
-from .driver import run_in_chunks
+from .chunks import DIVERGED, OK, run_in_chunks
 from .integrator import _diverged, _rk4_step, _rk4_step_two_links_one_mode
-from .loop import DIVERGED, OK
 from .results import SimulationResult, assemble_result
 
 __all__ = [

@@ -2,11 +2,10 @@
 
 :func:`load_scenario` reads a file, :meth:`Scenario.from_dict` builds the same
 from a mapping; both return a :class:`Scenario` holding the built library
-objects, and ``simulate(s.arm, **s.simulate_kwargs())`` runs it
-(:func:`flexarm.simulate`). ``flexarm simulate --scenario FILE`` is the
-command-line front end; ``examples/paper_square.toml`` is a complete file. The
-schema, the reading of files and the errors are in
-:mod:`flexarm.sim.scenario_schema`.
+objects, and ``s.simulate()`` runs it (:func:`flexarm.simulate`).
+``flexarm simulate --scenario FILE`` is the command-line front end;
+``examples/paper_square.toml`` is a complete file. The schema, the reading of
+files and the errors are in :mod:`flexarm.sim.scenario_schema`.
 
 Examples
 --------
@@ -31,7 +30,7 @@ from ..control.custom import call_factory, is_factory_spec, load_factory
 from ..control.lqg import LQG
 from ..control.reflected import ReflectedTipPD
 from ..control.shapers import Shaper, design, for_modes
-from ..control.trajectories import Circle, Line, PointToPoint, Square, Waypoints
+from ..control.trajectories import Circle, Line, PointToPoint, Square, Trajectory, Waypoints
 from ..model.arm import FlexibleArm
 from ..model.joints import LinearJoint, MakkarFriction, NonlinearJoint
 from ..model.link import Link
@@ -42,6 +41,8 @@ from ..sensing.delays import (
     travel_delay,
 )
 from ..sensing.sensors import JointSensor, PointSensor, Sensor, TipSensor
+from .closed_loop import simulate
+from .results import SimulationResult
 from .scenario_schema import (
     CONTROLLERS,
     DELAY_MODELS,
@@ -52,9 +53,9 @@ from .scenario_schema import (
     SHAPERS,
     TRAJECTORY_KINDS,
     ScenarioReader,
-    SimulationSettings,
     read_scenario,
 )
+from .settings import SimulationSettings
 
 __all__ = ["SENSORS", "TRAJECTORIES", "Scenario", "load_scenario", "sensor_path_length"]
 
@@ -116,18 +117,11 @@ class Scenario:
         The plant.
     controller : Controller
         The feedback law.
-    trajectory : trajectory object
+    trajectory : Trajectory
         The desired end-effector path (:mod:`flexarm.control.trajectories`).
-    sensor : JointSensor, PointSensor or TipSensor
-        What the controller sees.
-    delay : DelayModel
-        Transport delay of the sensed signal.
-    delay_reference : bool
-        Whether the reference fed to the control law is delayed as well.
-    shaper : Shaper or None
-        Input shaper on the reference path.
     simulation : SimulationSettings
-        Duration, control period and the other simulator settings.
+        Everything else that defines the run: the sensor, its delay, the shaper,
+        the duration, the control period and the other settings.
     source : str
         Where it came from (file name), for messages.
     description : dict
@@ -138,14 +132,20 @@ class Scenario:
 
     arm: FlexibleArm
     controller: Controller
-    trajectory: Any
-    sensor: Sensor
-    delay: DelayModel = field(default_factory=DelayModel.none)
-    delay_reference: bool = False
-    shaper: Shaper | None = None
+    trajectory: Trajectory
     simulation: SimulationSettings = field(default_factory=SimulationSettings)
     source: str = "scenario"
     description: dict[str, Any] = field(default_factory=dict, compare=False)
+
+    @property
+    def sensor(self) -> Sensor:
+        """What the controller sees (``simulation.sensor``)."""
+        return self.simulation.sensor
+
+    @property
+    def delay(self) -> DelayModel:
+        """The sensed signal's transport delay (``simulation.delay``)."""
+        return self.simulation.delay
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], source: str = "scenario") -> Scenario:
@@ -178,7 +178,8 @@ class Scenario:
         controller, ctrl_d = _controller(r, data, arm)
         delay, reference, delay_d = _delay(r, data, arm, sensor)
         shaper, shaper_d = _shaper(r, data, arm)
-        settings, sim_d = _simulation(r, data, arm, trajectory)
+        parts = {"sensor": sensor, "delay": delay, "delay_reference": reference, "shaper": shaper}
+        settings, sim_d = _simulation(r, data, arm, trajectory, parts)
         description = {
             "source": source,
             "arm": arm_d,
@@ -193,38 +194,28 @@ class Scenario:
             arm=arm,
             controller=controller,
             trajectory=trajectory,
-            sensor=sensor,
-            delay=delay,
-            delay_reference=reference,
-            shaper=shaper,
             simulation=settings,
             source=source,
             description=_plain(description),
         )
 
     def simulate_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :func:`flexarm.simulate` after the arm:
-        ``simulate(s.arm, **s.simulate_kwargs())``."""
-        s = self.simulation
+        """The arguments of :func:`flexarm.simulate` after the arm (the controller, the
+        trajectory and the settings): ``simulate(s.arm, **s.simulate_kwargs())``, or a
+        run of :func:`flexarm.simulate_many` with ``{"arm": s.arm, **s.simulate_kwargs()}``."""
         return {
             "controller": self.controller,
             "trajectory": self.trajectory,
-            "sensor": self.sensor,
-            "delay": self.delay,
-            "delay_reference": self.delay_reference,
-            "shaper": self.shaper,
-            "duration": s.duration,
-            "dt": s.dt,
-            "substeps": s.substeps,
-            "torque_limit": s.torque_limit,
-            "elbow": s.elbow,
-            "max_deflection": s.max_deflection,
-            "rng": s.seed,
-            "smoothing": s.smoothing,
-            "feedforward": s.feedforward,
-            "check_sampling": s.check_sampling,
-            "record_every": s.record_every,
+            "settings": self.simulation,
         }
+
+    def simulate(self, **options: Any) -> SimulationResult:
+        """Run the scenario: :func:`flexarm.simulate` with its objects and settings.
+
+        ``options`` are passed on (``progress``, ``stop``, ``rng``, or settings to
+        override).
+        """
+        return simulate(self.arm, **self.simulate_kwargs(), **options)
 
 
 # ------------------------------------------------------------------ sections
@@ -513,12 +504,20 @@ def _shaper(
 
 
 def _simulation(
-    r: ScenarioReader, data: Mapping[str, Any], arm: FlexibleArm, trajectory: Any
+    r: ScenarioReader,
+    data: Mapping[str, Any],
+    arm: FlexibleArm,
+    trajectory: Trajectory,
+    parts: Mapping[str, Any],
 ) -> tuple[SimulationSettings, dict[str, Any]]:
+    """The ``[simulation]`` section with the sections built before it (``parts``: the
+    sensor, the delay and the shaper) as :class:`SimulationSettings`."""
     t = r.table(data, "simulation")
-    settings: SimulationSettings = r.build(SimulationSettings, t, "simulation")
+    r.keys(t, "simulation", SimulationSettings.FILE_KEYS, "[simulation]")
+    with r.library("simulation", t):
+        settings = SimulationSettings(**parts, **t)
     duration = float(trajectory.duration) if settings.duration is None else settings.duration
-    settings = dataclasses.replace(settings, duration=duration)
+    settings = settings.replace(duration=duration)
     if round(duration / settings.dt) < 1:
         # the key that set the duration: the simulation's, or the trajectory's own length
         if "duration" in t:
@@ -538,7 +537,7 @@ def _simulation(
             f"must be a scalar or one value per joint ({arm.n_links}). "
             f"Got {len(limit)} values instead.",
         )
-    return settings, dataclasses.asdict(settings)
+    return settings, {k: getattr(settings, k) for k in SimulationSettings.FILE_KEYS}
 
 
 def _plain(value: Any) -> Any:

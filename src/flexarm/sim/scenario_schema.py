@@ -2,9 +2,9 @@
 
 :func:`load_scenario` reads a file, :meth:`Scenario.from_dict` builds the same
 from a mapping; both return a :class:`Scenario` holding the built library
-objects, and ``simulate(s.arm, **s.simulate_kwargs())`` runs it
-(:func:`flexarm.simulate`). ``flexarm simulate --scenario FILE`` is the
-command-line front end; ``examples/paper_square.toml`` is a complete file.
+objects, and ``s.simulate()`` runs it (:func:`flexarm.simulate`).
+``flexarm simulate --scenario FILE`` is the command-line front end;
+``examples/paper_square.toml`` is a complete file.
 
 Schema
 ------
@@ -138,14 +138,9 @@ import re
 import tomllib
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import dataclass
 from typing import Any, NoReturn
 
-import numpy as np
-
-from .._validation import check_array, check_int, check_option, check_real
-from ..control.trajectories import ELBOWS
-from ..errors import InvalidTypeError, InvalidValueError
+from ..errors import InvalidValueError
 
 __all__ = [
     "CONTROLLERS",
@@ -159,7 +154,6 @@ __all__ = [
     "TRAJECTORY_KINDS",
     "ScenarioError",
     "ScenarioReader",
-    "SimulationSettings",
     "apply_overrides",
     "read_scenario",
 ]
@@ -319,83 +313,3 @@ def apply_overrides(data: Mapping[str, Any], changes: Mapping[str, Any]) -> dict
         merged.update(value)
         out[section] = merged
     return out
-
-
-# ------------------------------------------------------------------ settings
-@dataclass(frozen=True)
-class SimulationSettings:
-    """The ``[simulation]`` section: keyword arguments of :func:`flexarm.simulate`.
-
-    Parameters
-    ----------
-    duration : float, optional
-        Simulated time, s (> 0; None: the trajectory's duration).
-    dt : float
-        Control period, s (> 0).
-    substeps : int
-        RK4 steps per control period (>= 1).
-    torque_limit : float or tuple of float, optional
-        Symmetric saturation of the joint torques, N m (> 0; None: none).
-    seed : int, optional
-        Seed of the sensor noise (>= 0; None: unseeded).
-    elbow : {"positive", "negative"}
-        Inverse-kinematics branch of the reference.
-    max_deflection : float, optional
-        Link tip deflection counted as divergence, m (> 0; None: the link's length).
-    smoothing : float
-        Zero-phase Gaussian smoothing of the reference path, s (>= 0; 0: none).
-    feedforward : bool, optional
-        Add the rigid inverse dynamics of the reference (None: what the
-        controller asks for).
-    check_sampling : bool
-        Refuse a control period beyond the sampled loop's stability bound.
-    record_every : int
-        Record every ``record_every``-th control instant and the last (>= 1).
-    """
-
-    duration: float | None = None
-    dt: float = 2e-4
-    substeps: int = 1
-    torque_limit: float | tuple[float, ...] | None = None
-    seed: int | None = None
-    elbow: str = "positive"
-    max_deflection: float | None = None
-    smoothing: float = 0.0
-    feedforward: bool | None = None
-    check_sampling: bool = True
-    record_every: int = 1
-
-    def __post_init__(self) -> None:
-        owner = "SimulationSettings"
-        set_ = object.__setattr__
-        if self.duration is not None:
-            set_(self, "duration", check_real(self.duration, "duration", owner, positive=True))
-        set_(self, "dt", check_real(self.dt, "dt", owner, positive=True))
-        set_(self, "substeps", check_int(self.substeps, "substeps", owner, minimum=1))
-        set_(self, "record_every", check_int(self.record_every, "record_every", owner, minimum=1))
-        if self.torque_limit is not None:
-            limit = check_array(self.torque_limit, "torque_limit", owner, finite=False)
-            if limit.ndim > 1 or limit.dtype.kind == "c" or not np.all(limit > 0):
-                raise InvalidValueError(
-                    f"The 'torque_limit' parameter of {owner} must be > 0, a scalar or one per "
-                    f"joint. Got {self.torque_limit!r} instead."
-                )
-            value = float(limit) if limit.ndim == 0 else tuple(float(x) for x in limit)
-            set_(self, "torque_limit", value)
-        if self.seed is not None:
-            set_(self, "seed", check_int(self.seed, "seed", owner, minimum=0))
-        check_option(self.elbow, "elbow", owner, ELBOWS)
-        if self.max_deflection is not None:
-            set_(
-                self,
-                "max_deflection",
-                check_real(self.max_deflection, "max_deflection", owner, positive=True),
-            )
-        set_(self, "smoothing", check_real(self.smoothing, "smoothing", owner, nonnegative=True))
-        for name in ("feedforward", "check_sampling"):
-            value = getattr(self, name)
-            if not isinstance(value, bool) and not (name == "feedforward" and value is None):
-                raise InvalidTypeError(
-                    f"The '{name}' parameter of {owner} must be true or false. "
-                    f"Got {value!r} instead."
-                )

@@ -32,8 +32,8 @@ from .._validation import check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arm import BOUNDARIES, FlexibleArm
 from ..sim.open_loop import TorqueFunction, simulate_open_loop
+from ..sim.prescribed import JointMotion, simulate_prescribed
 from ..sim.results import SimulationError, SimulationResult
-from .prescribed_motion import JointMotion, simulate_prescribed
 
 __all__ = ["ConvergenceCase", "ModalConvergence", "convergence_check"]
 
@@ -184,7 +184,7 @@ def convergence_check(
         Joint torques as :func:`flexarm.simulate_open_loop` takes them.
     motion : callable, optional
         Prescribed joint motion as
-        :func:`flexarm.studies.prescribed_motion.simulate_prescribed` takes it.
+        :func:`flexarm.sim.prescribed.simulate_prescribed` takes it.
     run : callable, optional
         Any run, ``run(arm) -> SimulationResult`` (e.g. a closed loop:
         ``lambda a: flexarm.simulate(a, controller, trajectory, duration=5)``),

@@ -13,7 +13,7 @@ bending frequency, 3.80 rad/s). A model without geometric stiffening predicts
 a tip deflection of -0.52 m at 5 s, -7.4 m at 9 s, -72 m at 10 s and -1.9 km at
 11 s; the beam stays within 0.6 m. flexarm drives the hub by prescribed joint
 motion — the joint angle is imposed exactly
-(:func:`flexarm.studies.prescribed_motion.simulate_prescribed`), not tracked by
+(:func:`flexarm.sim.prescribed.simulate_prescribed`), not tracked by
 a servo — and with geometric stiffening agrees with Exudyn's geometrically
 exact ANCF beam within 0.4 % of the peak deflection at Omega = 6 rad/s and
 0.05 % at 2 rad/s (tests/test_exudyn_oracle.py).
@@ -28,8 +28,8 @@ from .._validation import check_real
 from ..errors import InvalidValueError
 from ..model.arm import FlexibleArm
 from ..model.link import Link
+from ..sim.prescribed import JointMotion, simulate_prescribed
 from ..sim.results import SimulationResult
-from .prescribed_motion import JointMotion, simulate_prescribed
 
 __all__ = ["KANE_LINK", "kane_motion", "spin_up"]
 

@@ -60,11 +60,10 @@ def run_scenario(scenario: Mapping[str, Value]) -> SimulationResult:
     SimulationError
         If the run diverges.
     """
-    from ..sim.closed_loop import simulate
     from ..sim.scenario import Scenario
 
     sc = Scenario.from_dict(scenario, source=RUN_SOURCE)
-    return simulate(sc.arm, **sc.simulate_kwargs(), progress=False)
+    return sc.simulate(progress=False)
 
 
 def record_of(run_id: str, outcome: SimulationResult | BaseException) -> Record:

@@ -27,8 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...control.linearize import closed_loop_poles
+from ...control.trajectories import Square
 from ...sim.batch import Outcome, iter_simulations
-from ...sim.closed_loop import check_budget, simulate
+from ...sim.closed_loop import check_budget
 from ...sim.results import SimulationError
 from ...sim.scenario import Scenario
 from .cases import (
@@ -229,7 +230,7 @@ def run_case(case: Case, duration: float | None, dt: float) -> CaseResult:
     """
     scenario = Scenario.from_dict(case.scenario_dict(duration, dt), source=_SOURCE)
     try:
-        outcome: Outcome = simulate(scenario.arm, **scenario.simulate_kwargs(), progress=False)
+        outcome: Outcome = scenario.simulate(progress=False)
     except SimulationError as exc:
         outcome = exc
     return case_result(case, scenario, outcome)
@@ -258,7 +259,9 @@ def case_result(case: Case, scenario: Scenario, outcome: Outcome) -> CaseResult:
 
 def square_side() -> float:
     """Side of the default square the study tracks, m."""
-    return float(Scenario.from_dict({}, source=_SOURCE).trajectory.side)
+    trajectory = Scenario.from_dict({}, source=_SOURCE).trajectory
+    assert isinstance(trajectory, Square)
+    return float(trajectory.side)
 
 
 def progress_printer(progress: Progress | bool | None) -> Progress | None:

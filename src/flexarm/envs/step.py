@@ -4,10 +4,11 @@
 period each: the action (N m) is clipped to the torque limits and held (zero-order
 hold) over ``substeps`` RK4 steps of the compiled dynamics
 (:func:`flexarm.sim.integrator.rk4_step`, or its two-link one-mode form), the
-sensed signal passes through the transport delay at substep resolution exactly as
-in :func:`flexarm.sim.loop.run`, then the observation, the tracking error and the
-reward are formed at the new instant. :func:`reset_batch` starts arms whose state
-was set (the delay line primed at steady state, as :func:`flexarm.simulate` does).
+sensed signal passes through the transport delay at substep resolution with the
+closed loop's own compiled sensor (:mod:`flexarm.sensing.channels`), then the
+observation, the tracking error and the reward are formed at the new instant.
+:func:`reset_batch` starts arms whose state was set (the delay line primed at
+steady state, as :func:`flexarm.simulate` does).
 
 Both are ``nogil`` and allocate nothing: every array is preallocated in
 :class:`BatchState` (per arm), :class:`EnvArrays` (shared, constant) and
@@ -37,8 +38,9 @@ from .._compile import njit_runtime_free
 from ..model.arrays import ArmArrays, Workspace
 from ..model.dynamics_points import _point_kinematics
 from ..model.dynamics_two_links import _is_two_links_one_mode
+from ..sensing import _channels
+from ..sensing.channels import SensorArrays
 from ..sim.integrator import _diverged, _rk4_step, _rk4_step_two_links_one_mode
-from ..sim.sensed import SensorArrays, _sense
 
 __all__ = [
     "DIVERGED",
@@ -64,12 +66,9 @@ class EnvArrays(NamedTuple):
     Attributes
     ----------
     sensor : SensorArrays
-        The sensor and its delay (:class:`flexarm.sim.loop.SensorArrays`; its
-        ``noise`` field is unused: noise comes from ``BatchState.noise``).
-    levels : (n_ch,)
-        Noise standard deviation of each channel (rad, rad/s, m, m/s).
-    pade_gain : (p,)
-        Steady-state gain of the discrete Padé filter's state.
+        The sensor, its delay and its noise levels
+        (:class:`flexarm.sensing.channels.SensorArrays`; the draws come from
+        ``BatchState.noise``).
     target : (n_steps + 1, 4)
         The reference's x, y (m), vx, vy (m/s) at each instant.
     limit : (n_links,)
@@ -88,8 +87,6 @@ class EnvArrays(NamedTuple):
     """
 
     sensor: SensorArrays
-    levels: F64
-    pade_gain: F64
     target: F64
     limit: F64
     max_deflection: F64
@@ -148,45 +145,29 @@ def _observe(
     """Observation, tracking error of arm ``i`` at its instant ``k`` (consumes a noise row)."""
     sensor = env.sensor
     n_links = model.link.shape[0]
-    n_ch = env.levels.shape[0]
-    order = sensor.pade_ad.shape[0]
+    n_ch = sensor.levels.shape[0]
     q, dq = state.q[i], state.dq[i]
     raw = sig[0:n_ch]
     delayed = sig[n_ch : 2 * n_ch]
     point = sig[sig.shape[0] - 4 :]
-    _sense(q, dq, model, sensor, raw)
-    n_buf = state.buffer.shape[1]
-    if n_buf > 1:
-        src = state.cursor[i] - (n_buf - 1)
-        if src < 0:
-            src = 0
-        for c in range(n_ch):
-            delayed[c] = state.buffer[i, src % n_buf, c]
-    elif order > 0:
-        for c in range(n_ch):
-            acc = sensor.pade_dd[0] * raw[c]
-            for j in range(order):
-                acc += sensor.pade_cd[j] * state.pade_x[i, c, j]
-            delayed[c] = acc
-    else:
-        for c in range(n_ch):
-            delayed[c] = raw[c]
+    _channels.sense(q, dq, model, sensor, raw)
+    _channels.delayed_signal(
+        sensor, state.buffer[i], state.pade_x[i], state.cursor[i], raw, delayed
+    )
     has_noise = state.noise.shape[1] > 0
     row = state.noise_row[i]
+    if has_noise:
+        _channels.corrupt(sensor, True, state.noise[i, row], delayed)
+        state.noise_row[i] = row + 1
+    else:
+        _channels.corrupt(sensor, False, raw, delayed)
     joint = sensor.link[0] < 0
     obs = state.obs[i]
     for c in range(n_ch):
         v = delayed[c]
-        if has_noise:
-            v += env.levels[c] * state.noise[i, row, c]
-        res = sensor.resolution[c]
-        if res > 0.0:
-            v = np.round(v / res) * res
         if joint and c < n_links:  # encoder angles wrapped to [-pi, pi)
             v -= 2.0 * math.pi * math.floor((v + math.pi) / (2.0 * math.pi))
         obs[c] = v
-    if has_noise:
-        state.noise_row[i] = row + 1
     k = state.k[i]
     for c in range(4):
         obs[n_ch + c] = env.target[k, c]
@@ -207,19 +188,14 @@ def reset_batch(
     """Start the episodes of arms ``i0 <= i < i1`` with ``mask[i]`` (their ``q, dq``
     and noise already set): instant 0, the delay line at steady state on the
     initial sensed signal, the first observation."""
-    n_ch = env.levels.shape[0]
-    order = env.pade_gain.shape[0]
+    n_ch = env.sensor.levels.shape[0]
     raw = sig[0:n_ch]
     for i in range(i0, i1):
         if not mask[i]:
             continue
-        _sense(state.q[i], state.dq[i], model, env.sensor, raw)
-        for s in range(state.buffer.shape[1]):
-            for c in range(n_ch):
-                state.buffer[i, s, c] = raw[c]
-        for c in range(n_ch):
-            for j in range(order):
-                state.pade_x[i, c, j] = raw[c] * env.pade_gain[j]
+        _channels.prime(
+            state.q[i], state.dq[i], model, env.sensor, state.buffer[i], state.pade_x[i], raw
+        )
         for j in range(state.tau.shape[1]):
             state.tau[i, j] = 0.0
         state.cursor[i] = 0
@@ -250,8 +226,7 @@ def step_batch(
     """
     sensor = env.sensor
     n_links = model.link.shape[0]
-    n_ch = env.levels.shape[0]
-    order = sensor.pade_ad.shape[0]
+    n_ch = sensor.levels.shape[0]
     dt = env.params[0]
     substeps = env.counts[0]
     n_steps = env.counts[1]
@@ -259,7 +234,6 @@ def step_batch(
     sig = scratch.signals
     raw = sig[0:n_ch]
     x_new = sig[2 * n_ch : sig.shape[0] - 4]
-    n_buf = state.buffer.shape[1]
     two_links_one_mode = _is_two_links_one_mode(model)
     for i in range(i0, i1):
         if not active[i]:
@@ -277,26 +251,13 @@ def step_batch(
             effort += (u / lim) ** 2
         bad = False
         for _ in range(substeps):
-            if order > 0:  # Padé filter: x <- Ad x + Bd u over this substep
-                _sense(q, dq, model, sensor, raw)
-                for c in range(n_ch):
-                    for j in range(order):
-                        acc = sensor.pade_bd[j] * raw[c]
-                        for j2 in range(order):
-                            acc += sensor.pade_ad[j, j2] * state.pade_x[i, c, j2]
-                        x_new[j] = acc
-                    for j in range(order):
-                        state.pade_x[i, c, j] = x_new[j]
+            _channels.advance_pade(q, dq, model, sensor, state.pade_x[i], raw, x_new)
             if two_links_one_mode:
                 _rk4_step_two_links_one_mode(q, dq, tau, tau, tau, h, model)
             else:
                 _rk4_step(q, dq, tau, tau, tau, h, model, scratch.ws, scratch.stages)
             state.cursor[i] += 1
-            if n_buf > 1:
-                _sense(q, dq, model, sensor, raw)
-                slot = state.cursor[i] % n_buf
-                for c in range(n_ch):
-                    state.buffer[i, slot, c] = raw[c]
+            _channels.record_sample(q, dq, model, sensor, state.buffer[i], state.cursor[i], raw)
             if _diverged(q, dq, model, env.max_deflection):
                 bad = True
                 break

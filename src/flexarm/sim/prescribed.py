@@ -27,10 +27,10 @@ from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arrays import ArmArrays, Workspace, make_workspace
 from ..model.plant import Plant, check_plant
 from ..model.prescribed import free_range, prescribed_dynamics
-from ..sim.integrator import _diverged
-from ..sim.loop import DIVERGED, OK
-from ..sim.open_loop import open_loop_result
-from ..sim.results import SimulationResult
+from .chunks import DIVERGED, OK
+from .integrator import _diverged
+from .open_loop import open_loop_result
+from .results import SimulationResult
 
 __all__ = ["JointMotion", "simulate_prescribed"]
 
