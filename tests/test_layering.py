@@ -83,6 +83,7 @@ WITHIN: dict[str, list[str]] = {
         "animation",  # before results: SimulationResult.animate calls it
         "results",
         "chunks",
+        "_rk4",
         "integrator",
         "_reference_kernels",
         "loop",

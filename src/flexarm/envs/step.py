@@ -40,7 +40,7 @@ from ..model.dynamics_points import _point_kinematics
 from ..model.dynamics_two_links import _is_two_links_one_mode
 from ..sensing import _channels
 from ..sensing.channels import SensorArrays
-from ..sim.integrator import _diverged, _rk4_step, _rk4_step_two_links_one_mode
+from ..sim import _rk4
 
 __all__ = [
     "DIVERGED",
@@ -253,12 +253,12 @@ def step_batch(
         for _ in range(substeps):
             _channels.advance_pade(q, dq, model, sensor, state.pade_x[i], raw, x_new)
             if two_links_one_mode:
-                _rk4_step_two_links_one_mode(q, dq, tau, tau, tau, h, model)
+                _rk4.rk4_step_two_links_one_mode(q, dq, tau, tau, tau, h, model)
             else:
-                _rk4_step(q, dq, tau, tau, tau, h, model, scratch.ws, scratch.stages)
+                _rk4.rk4_step(q, dq, tau, tau, tau, h, model, scratch.ws, scratch.stages)
             state.cursor[i] += 1
             _channels.record_sample(q, dq, model, sensor, state.buffer[i], state.cursor[i], raw)
-            if _diverged(q, dq, model, env.max_deflection):
+            if _rk4.diverged(q, dq, model, env.max_deflection):
                 bad = True
                 break
         state.k[i] += 1

@@ -40,9 +40,9 @@ from ..model.dynamics_two_links import _is_two_links_one_mode
 from ..model.kernel_checks import check_model, check_vector, check_workspace
 from ..sensing import _channels
 from ..sensing.channels import SensorArrays, check_sensor_arrays
+from . import _rk4
 from ._reference_kernels import ReferenceStream, stream_row
 from .chunks import DIVERGED, OK
-from .integrator import _diverged, _rk4_step, _rk4_step_two_links_one_mode
 
 __all__ = [
     "DIVERGED",
@@ -352,12 +352,12 @@ def _run(
         for _ in range(substeps):
             _channels.advance_pade(q, dq, model, sensor, state.pade_x, raw, x_new)
             if two_links_one_mode:
-                _rk4_step_two_links_one_mode(q, dq, tau, tau, tau, h, model)
+                _rk4.rk4_step_two_links_one_mode(q, dq, tau, tau, tau, h, model)
             else:
-                _rk4_step(q, dq, tau, tau, tau, h, model, ws, state.scratch)
+                _rk4.rk4_step(q, dq, tau, tau, tau, h, model, ws, state.scratch)
             state.cursor[0] += 1
             _channels.record_sample(q, dq, model, sensor, state.buffer, state.cursor[0], raw)
-            if _diverged(q, dq, model, loop.max_deflection):
+            if _rk4.diverged(q, dq, model, loop.max_deflection):
                 return DIVERGED, k
     return OK, k1
 

@@ -33,8 +33,8 @@ from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arrays import ArmArrays, Workspace, make_workspace
 from ..model.dynamics_two_links import _is_two_links_one_mode
 from ..model.plant import Plant, check_plant
+from . import _rk4
 from .chunks import DIVERGED, OK, run_in_chunks
-from .integrator import _diverged, _rk4_step, _rk4_step_two_links_one_mode
 from .results import SimulationResult, assemble_result
 
 __all__ = [
@@ -163,10 +163,10 @@ def run_open_loop(
             for half in range(3):
                 _torque(mode, table, source, k, s, half, substeps, ts + 0.5 * half * h, st[half])
             if two_links_one_mode:
-                _rk4_step_two_links_one_mode(q, dq, st[0], st[1], st[2], h, model)
+                _rk4.rk4_step_two_links_one_mode(q, dq, st[0], st[1], st[2], h, model)
             else:
-                _rk4_step(q, dq, st[0], st[1], st[2], h, model, state.ws, state.scratch)
-            if _diverged(q, dq, model, max_deflection):
+                _rk4.rk4_step(q, dq, st[0], st[1], st[2], h, model, state.ws, state.scratch)
+            if _rk4.diverged(q, dq, model, max_deflection):
                 return DIVERGED, k
     return OK, k1
 

@@ -27,8 +27,8 @@ from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arrays import ArmArrays, Workspace, make_workspace
 from ..model.plant import Plant, check_plant
 from ..model.prescribed import free_range, prescribed_dynamics
+from . import _rk4
 from .chunks import DIVERGED, OK
-from .integrator import _diverged
 from .open_loop import open_loop_result
 from .results import SimulationResult
 
@@ -116,7 +116,7 @@ def _run(
             for i in range(n_links):
                 q[a0 + i] = table[last, 0, i]
                 dq[a0 + i] = table[last, 1, i]
-            if _diverged(q, dq, model, max_deflection):
+            if _rk4.diverged(q, dq, model, max_deflection):
                 return DIVERGED, k
     return OK, n_rows - 1
 
