@@ -258,15 +258,40 @@ def test_result_load_rejects_malformed_files(tmp_path):
 
 
 def test_result_metrics_and_series(paper):
+    """Each metric against its definition written out here from the recorded series:
+    the error is the end effector's distance from the desired point; corner errors
+    the largest error within a second after each corner; the residual vibration the
+    RMS elastic deflection after the motion ends (4 s of a 2 m square at 1 s a side)."""
     res = simulate(paper, trajectory=Square(side=2.0, time_per_side=1.0), duration=5.0)
     m = res.metrics()
-    assert m["max_error_m"] >= m["rms_error_m"] > 0
-    assert len(m["corner_errors_m"]) == 4
+    tip, desired, t = res.tip, res.desired, res.t
+    error = np.hypot(tip[:, 0] - desired[:, 0], tip[:, 1] - desired[:, 1])
+    np.testing.assert_allclose(res.error, error, rtol=0, atol=1e-15)
+    assert m["rms_error_m"] == pytest.approx(np.sqrt(np.mean(error**2)), rel=1e-12)
+    assert m["max_error_m"] == pytest.approx(error.max(), rel=1e-15)
+    corners = [1.0, 2.0, 3.0, 4.0]  # the turns at the end of each 1 s side
+    assert list(res.corner_times) == corners
+    want = [error[(t >= c - 1e-12) & (t <= c + 1.0 + 1e-12)].max() for c in corners]
+    np.testing.assert_allclose(m["corner_errors_m"], want, rtol=1e-15)
     assert m["sim_time_s"] == pytest.approx(5.0)
-    np.testing.assert_allclose(res.error, np.linalg.norm(res.tip - res.desired, axis=1))
-    assert res.link_deflections.shape == (res.t.size, 2)
-    # the motion ends at 4 s: the residual vibration is measured over the last second
-    assert m["residual_vibration_m"] > 0
+    # the elastic deflection: the tip against the rigid kinematics of the joint angles
+    th1, th2 = res.q[:, 0], res.q[:, 1]
+    rigid = np.column_stack(
+        [
+            4.5 * np.cos(th1) + 4.5 * np.cos(th1 + th2),
+            4.5 * np.sin(th1) + 4.5 * np.sin(th1 + th2),
+        ]
+    )
+    elastic = np.hypot(*(tip - rigid).T)
+    after = t >= 4.0 - 1e-12
+    assert m["residual_vibration_m"] == pytest.approx(np.sqrt(np.mean(elastic[after] ** 2)))
+    # the links' tip deflections: each link's modal coordinates times its tip shape
+    assert res.link_deflections.shape == (t.size, 2)
+    for i in range(2):
+        phi_tip = paper.modes[i].shape(4.5)[:, 0]
+        np.testing.assert_allclose(
+            res.link_deflections[:, i], res.q[:, 2 + i] * phi_tip[0], rtol=1e-13, atol=1e-15
+        )
 
 
 def test_the_rigid_tip_and_the_elastic_deflection_of_a_three_link_run():
@@ -310,16 +335,36 @@ def test_control_effort_is_the_trapezoid_of_the_squared_torques(n_links):
 
 
 def test_to_pandas(paper, short_square):
+    """The frame holds the result's own series, indexed by time."""
     pd = pytest.importorskip("pandas")
-    df = simulate(paper, trajectory=short_square, duration=0.1).to_pandas()
+    res = simulate(paper, trajectory=short_square, duration=0.1)
+    df = res.to_pandas()
     assert isinstance(df, pd.DataFrame)
-    assert {"theta1", "dtheta1", "tau1", "x_tip", "error"} <= set(df.columns)
+    np.testing.assert_array_equal(df.index.to_numpy(), res.t)
+    np.testing.assert_array_equal(df["theta1"].to_numpy(), res.q[:, 0])
+    np.testing.assert_array_equal(df["dtheta1"].to_numpy(), res.dq[:, 0])
+    np.testing.assert_array_equal(df["tau1"].to_numpy(), res.tau[:, 0])
+    np.testing.assert_array_equal(df["x_tip"].to_numpy(), res.tip[:, 0])
+    np.testing.assert_array_equal(df["error"].to_numpy(), res.error)
 
 
-def test_plot_returns_a_figure(paper, short_square):
+def test_plot_draws_the_results_series(paper, short_square):
+    """The figure's lines are the result's path, desired path, error (mm) and link
+    deflections (mm), on labelled axes."""
     res = simulate(paper, trajectory=short_square, duration=0.2)
     fig = res.plot()
-    assert len(fig.axes) == 3
+    ax_xy, ax_err, ax_def = fig.axes
+    desired, tip = ax_xy.get_lines()[:2]
+    np.testing.assert_array_equal(desired.get_xydata(), res.desired)
+    np.testing.assert_array_equal(tip.get_xydata(), res.tip)
+    np.testing.assert_allclose(ax_err.get_lines()[0].get_ydata(), 1e3 * res.error)
+    for i, line in enumerate(ax_def.get_lines()):
+        np.testing.assert_allclose(line.get_ydata(), 1e3 * res.link_deflections[:, i])
+    assert (ax_xy.get_xlabel(), ax_err.get_ylabel(), ax_def.get_xlabel()) == (
+        "x (m)",
+        "error (mm)",
+        "t (s)",
+    )
     import matplotlib.pyplot as plt
 
     plt.close(fig)
