@@ -11,6 +11,7 @@ from flexarm.studies.reproduction.beyond import (
     FUZZY_KS,
     LQG_CANDIDATES,
     ROWS,
+    SENSORS,
     Beyond,
     RowResult,
     _targets,
@@ -84,13 +85,17 @@ def test_a_short_run_of_the_study():
     b = run_beyond(0.3, 2e-4, workers=2)
     assert set(b.chosen) == {"tip", "point:1:0.5"} and set(b.chosen.values()) <= set(LQG_CANDIDATES)
     assert 0.5 < b.alpha_limit < 1.0
-    n = (
-        2 * len(LQG_CANDIDATES) * len(ROWS)
-        + len(ROWS)
-        + 2 * (len(CONSTANT_GAINS) - 1 + len(FUZZY_KS))
-    )
-    assert len(b.rows) == n
+    # the runs the study is to make, each once: every LQG candidate on every row for
+    # both sensors, the reflected law on every row of the tip, and on the nominal row
+    # the fuzzy adaptive LQG and the constant gains above 1 (gain 1 is the candidate)
+    rows = [r.name for r in ROWS]
+    want = {(f"lqg {c}", s, row) for c in LQG_CANDIDATES for s in SENSORS for row in rows}
+    want |= {("reflected", "tip", row) for row in rows}
+    want |= {(f"lqg fuzzy ks {ks:g}", s, "nominal") for ks in FUZZY_KS for s in SENSORS}
+    want |= {(f"lqg gain {g:g}", s, "nominal") for g in CONSTANT_GAINS[1:] for s in SENSORS}
+    made = [(r["law"], r["sensor"], r["row"]) for r in b.rows]
+    assert sorted(made) == sorted(want)
     summary = b.summary()
-    assert summary["chosen"] == b.chosen and len(summary["runs"]) == n
+    assert summary["chosen"] == b.chosen and summary["runs"] == b.rows
     assert "Beyond the paper" in b.html() and any("targets met" in ln for ln in b.text_lines())
     assert np.isfinite(b.adaptation("tip")[1])

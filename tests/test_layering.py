@@ -62,6 +62,7 @@ WITHIN: dict[str, list[str]] = {
     ],
     "sensing": ["delays", "sensors", "_channels", "channels"],
     "control": [
+        "options",
         "signals",
         "_path_kernels",
         "trajectories",

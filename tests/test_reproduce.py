@@ -270,11 +270,16 @@ assert not heavy, heavy
     assert res.returncode == 0, res.stderr
 
 
-def test_the_light_constants_match_the_controller():
-    from flexarm.control.adaptive import ADAPTATION_LAWS
+def test_every_adaptation_law_named_light_is_one_the_controller_takes():
+    """The names the command line reads without compiling a law are the ones the
+    fuzzy law accepts (and it refuses another)."""
+    from flexarm.control.adaptive import FuzzyAdaptiveJTPD
     from flexarm.studies.reproduction import cases
 
-    assert cases.ADAPTATION_LAWS == ADAPTATION_LAWS
+    for law in cases.ADAPTATION_LAWS:
+        assert FuzzyAdaptiveJTPD(150.0, 17.0, law=law).law == law
+    with pytest.raises(ValueError, match="'law'"):
+        FuzzyAdaptiveJTPD(150.0, 17.0, law="gain")
 
 
 # ------------------------------------------------- verdicts on hand-made cases

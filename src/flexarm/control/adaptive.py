@@ -51,12 +51,12 @@ from .controllers import (
     jacobian_transpose_law,
     operational_lengths,
 )
+from .options import ADAPTATION_LAWS
 from .signals import y_modes
 
 __all__ = ["ADAPTATION_LAWS", "FuzzyAdaptiveJTPD", "tip_deflections"]
 
 F64 = NDArray[np.float64]
-ADAPTATION_LAWS = ("scaled", "damping")
 
 # params layout (all float64; integer arrays are stored bit for bit):
 #   [0:4] Kp (row-major 2x2), [4:8] Kd, [8:8+N] link lengths,

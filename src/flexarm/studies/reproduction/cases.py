@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, cast
 import numpy as np
 
 from ..._io import JSONValue
+from ...control.options import ADAPTATION_LAWS
 
 if TYPE_CHECKING:
     from ...sim.results import SimulationResult
@@ -54,10 +55,6 @@ delay (the paper's experiment), or the deflected point itself (a real arm)."""
 PAPER_DELAY = "seed"
 """The transport delay of the paper's experiment (the seed's wave speed over the
 path to the sensor, a 2nd-order Padé, the reference delayed the same): paper.md §3."""
-ADAPTATION_LAWS = ("scaled", "damping")
-"""The fuzzy law's adaptation laws: :data:`flexarm.control.adaptive.ADAPTATION_LAWS`,
-repeated here so that reading them does not compile the controllers (a test
-keeps the two equal)."""
 DEFAULT_KS_RANGE = (0.0, 1.0, 10.0, 100.0, 1000.0)
 """The ``ks`` values of the sensitivity study (dimensionless)."""
 DEFAULT_DT = 2e-4
