@@ -4,6 +4,7 @@ one-line errors with status 2 and no files, divergence with status 1."""
 from __future__ import annotations
 
 import json
+import re
 import math
 import pathlib
 import shutil
@@ -418,6 +419,48 @@ def test_a_diverging_run_exits_1_with_one_line_and_keeps_the_partial_run(capsys,
     assert on_disk["status"] == "diverged"
     kept = SimulationResult.load(out_dir / "result.npz")
     assert kept.info["status"] == "diverged" and kept.t[-1] == pytest.approx(t)
+
+
+def _help_paragraph(capsys, name):
+    """The paragraph of ``flexarm simulate --help`` that starts with ``name:``, one line."""
+    with pytest.raises(SystemExit):
+        main(["simulate", "--help"])
+    text = capsys.readouterr().out
+    start = text.index(f"\n{name}: ") + 1
+    end = text.find("\n\n", start)
+    return " ".join(text[start : end if end > 0 else None].split())
+
+
+@pytest.mark.parametrize("sensor", ["joint", "tip"], ids=["completed", "diverged"])
+def test_the_help_says_what_an_ended_run_writes(capsys, tmp_path, sensor):
+    """The files the help names are the files a completed and a diverged run write,
+    and what it says of a diverged run's summary holds."""
+    output = _help_paragraph(capsys, "output")
+    named = set(re.findall(r"\b(\w+\.(?:npz|json|csv|png))\b", output))
+    assert named == FILES
+    assert 'its summary\'s status "diverged", its metrics null' in output
+    status, _, err = run(
+        capsys, "simulate", "--sensor", sensor, "--duration", "0.2", "--out", tmp_path / "out"
+    )
+    assert {p.name for p in (tmp_path / "out").iterdir()} == named
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    if sensor == "tip":
+        assert status == 1 and summary["status"] == "diverged"
+        assert summary["rms_error_m"] is None and summary["max_error_m"] is None
+        exits = _help_paragraph(capsys, "exit status")
+        assert (
+            "1 the simulation diverged (one line on stderr with the time and where the "
+            "partial run is kept)" in exits
+        )
+        assert len(err.strip().splitlines()) == 1 and str(tmp_path / "out") in err
+    else:
+        assert status == 0 and summary["status"] == "ok"
+
+
+def test_bad_input_writes_nothing_as_the_help_says(capsys, tmp_path):
+    assert "Bad input writes nothing." in _help_paragraph(capsys, "output")
+    status, _, _ = run(capsys, "simulate", "--duration", "-1", "--out", tmp_path / "out")
+    assert status == 2 and not (tmp_path / "out").exists()
 
 
 def test_a_diverging_run_without_out_writes_nothing(capsys, tmp_path):

@@ -204,6 +204,13 @@ def test_bad_study_parameters(kwargs, match):
         reproduce(duration=0.01, **kwargs)
 
 
+@pytest.mark.parametrize("switch", ["sensitivity", "beyond", "converged"])
+@pytest.mark.parametrize("value", [1, "no", None, np.True_])
+def test_every_switch_of_the_study_must_be_a_bool(switch, value):
+    with pytest.raises(TypeError, match=f"'{switch}' parameter of reproduce must be a bool"):
+        reproduce(duration=0.01, **{switch: value})
+
+
 # ---------------------------------------------------------------- figures
 UNIT_LABEL = re.compile(r"^\S.* \([^()]+\)$")  # "quantity (unit)"
 

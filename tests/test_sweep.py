@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import flexarm
-from flexarm.errors import InvalidValueError
+from flexarm.errors import InvalidTypeError, InvalidValueError
 from flexarm.sweeps import driver, execute
 from flexarm.sweeps.distributions import Choice, Integers, LogUniform, Normal, Uniform, key_rng
 from flexarm.sweeps.driver import SweepInterrupted, sweep
@@ -220,7 +220,7 @@ def test_processes_give_the_threads_table_bit_for_bit():
     assert not sweep(spec, workers=1, progress=False).info["processes"]  # nothing to share
     with pytest.raises(InvalidValueError, match="'processes' parameter of sweep"):
         sweep(spec, processes=True, client=object(), progress=False)
-    with pytest.raises(InvalidValueError, match="'processes' parameter of sweep"):
+    with pytest.raises(InvalidTypeError, match="'processes' parameter of sweep"):
         sweep(spec, processes="yes", progress=False)  # type: ignore[arg-type]
 
 

@@ -5,8 +5,8 @@ got, in one format::
 
     The 'length' parameter of Link must be > 0. Got -1.0 instead.
 
-Wrong types raise :class:`TypeError`; wrong values or shapes raise
-:class:`ValueError`.
+Wrong types raise :class:`TypeError` (a switch that is not a bool included:
+:func:`check_bool`); wrong values or shapes raise :class:`ValueError`.
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from .errors import InvalidTypeError, InvalidValueError
 
 __all__ = [
     "check_array",
+    "check_bool",
     "check_int",
     "check_option",
     "check_real",
@@ -129,6 +130,25 @@ def check_int(value: Any, name: str, owner: str, *, minimum: int | None = None) 
     if minimum is not None and n < minimum:
         raise InvalidValueError(_fail(name, owner, f">= {minimum}", n))
     return n
+
+
+def check_bool(value: Any, name: str, owner: str, *, optional: bool = False) -> bool | None:
+    """Return ``value`` if it is a bool (or None where ``optional``), else raise
+    :class:`InvalidTypeError`: a switch given as ``1``, ``"yes"`` or ``numpy.True_``
+    is a wrong type, not a wrong value.
+
+    Examples
+    --------
+    >>> check_bool(True, "converged", "reproduce")
+    True
+    >>> check_bool(1, "converged", "reproduce")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    flexarm.errors.InvalidTypeError: The 'converged' parameter of reproduce must be a bool...
+    """
+    if isinstance(value, bool) or (optional and value is None):
+        return value
+    raise InvalidTypeError(_fail(name, owner, "a bool or None" if optional else "a bool", value))
 
 
 def check_option(value: Any, name: str, owner: str, options: Iterable[str]) -> str:

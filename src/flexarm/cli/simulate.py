@@ -284,15 +284,17 @@ along the links from the base joint to the sensed point (0 for joint encoders, 9
 for the paper arm's tip), at the seed's speed (41 783 m/s) or at the dispersive group
 speed of the first link at its first clamped frequency.
 
-output: with --out DIR, nothing is written unless the run succeeds; then DIR (new, or
-an empty directory) receives result.npz (SimulationResult.load), summary.json (what
---json prints), timeseries.csv and tracking.png (tracking.pdf, tracking.svg with
---format), all at once (written beside it and renamed into place). Metrics that are
-undefined (corners after a short run's end) are null in JSON.
+output: with --out DIR, once the run has ended DIR (new, or an empty directory)
+receives result.npz (SimulationResult.load), summary.json (what --json prints),
+timeseries.csv and tracking.png (tracking.pdf, tracking.svg with --format), all at
+once (written beside it and renamed into place): the whole run, or a diverged run up
+to its divergence (its summary's status "diverged", its metrics null). Bad input
+writes nothing. Metrics that are undefined (corners after a short run's end) are
+null in JSON.
 
-exit status: 0 success; 1 the simulation diverged (one line on stderr with the time;
-nothing is written: run it from Python to get SimulationError.result, the partial
-result) or the results could not be written; 2 bad input (one line on stderr).
+exit status: 0 success; 1 the simulation diverged (one line on stderr with the time
+and where the partial run is kept) or the results could not be written; 2 bad input
+(one line on stderr, nothing written).
 """
 
 

@@ -28,8 +28,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._compile import njit_runtime_free
 from .._io import JSONValue
-from .._validation import check_array, check_int, check_option, check_real
-from ..errors import InvalidTypeError, InvalidValueError
+from .._validation import check_array, check_bool, check_int, check_option, check_real
+from ..errors import InvalidValueError
 from ..model.arrays import ArmArrays, Workspace, make_workspace
 from ..model.dynamics_two_links import _is_two_links_one_mode
 from ..model.plant import Plant, check_plant
@@ -305,11 +305,7 @@ def simulate_open_loop(
         max_defl = np.full(
             n_links, check_real(max_deflection, "max_deflection", _OWNER, positive=True)
         )
-    if not isinstance(progress, bool | None):
-        raise InvalidTypeError(
-            f"The 'progress' parameter of {_OWNER} must be a bool or None. "
-            f"Got {type(progress).__name__} instead."
-        )
+    check_bool(progress, "progress", _OWNER, optional=True)
     k_rows = grid.shape[0]
     state = OpenLoopState(
         q=np.array(x0[:n], dtype=float),

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any, Self, cast
 
 import numpy as np
 
-from .._validation import check_array, check_int, check_option, check_real
+from .._validation import check_array, check_bool, check_int, check_option, check_real
 from ..control.trajectories import ELBOWS
 from ..errors import InvalidTypeError, InvalidValueError
 from ..sensing.delays import DelayModel
@@ -37,15 +37,6 @@ METHODS = ("rk4", "scipy")
 """Integrators: the compiled fixed-step loop, or SciPy's adaptive reference."""
 
 _OWNER = "SimulationSettings"
-
-
-def _flag(value: object, name: str, *, optional: bool = False) -> None:
-    """A bool (or None where ``optional``), else InvalidTypeError naming ``name``."""
-    if not isinstance(value, bool) and not (optional and value is None):
-        what = "a bool or None" if optional else "a bool"
-        raise InvalidTypeError(
-            f"The '{name}' parameter of {_OWNER} must be {what}. Got {value!r} instead."
-        )
 
 
 @dataclass(frozen=True)
@@ -164,7 +155,7 @@ class SimulationSettings:
                 f"The 'delay' parameter of {_OWNER} must be a DelayModel. "
                 f"Got {type(self.delay).__name__} instead."
             )
-        _flag(self.delay_reference, "delay_reference")
+        check_bool(self.delay_reference, "delay_reference", _OWNER)
         if self.shaper is not None and not callable(getattr(self.shaper, "apply_function", None)):
             raise InvalidTypeError(
                 f"The 'shaper' parameter of {_OWNER} must be a Shaper (with apply_function). "
@@ -194,9 +185,9 @@ class SimulationSettings:
         check_option(self.method, "method", _OWNER, METHODS)
         if self.seed is not None:
             set_(self, "seed", check_int(self.seed, "seed", _OWNER, minimum=0))
-        _flag(self.feedforward, "feedforward", optional=True)
+        check_bool(self.feedforward, "feedforward", _OWNER, optional=True)
         set_(self, "smoothing", check_real(self.smoothing, "smoothing", _OWNER, nonnegative=True))
-        _flag(self.check_sampling, "check_sampling")
+        check_bool(self.check_sampling, "check_sampling", _OWNER)
         if self.method == "scipy" and (self.record_every != 1 or self._noisy()):
             raise InvalidValueError(
                 f"The 'method' parameter of {_OWNER}='scipy' supports noise-free sensing "

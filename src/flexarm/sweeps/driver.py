@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .._io import JSONValue, json_ready
-from .._validation import check_int
+from .._validation import check_bool, check_int
 from .._version import __version__
 from ..errors import InvalidValueError
 from ..sim.batch import default_workers
@@ -155,10 +155,7 @@ def sweep(
         check_int(workers, "workers", _OWNER, minimum=1)
     if chunk_size is not None:
         check_int(chunk_size, "chunk_size", _OWNER, minimum=1)
-    if processes is not None and not isinstance(processes, bool):
-        raise InvalidValueError(
-            f"The 'processes' parameter of sweep must be a bool or None. Got {processes!r} instead."
-        )
+    check_bool(processes, "processes", _OWNER, optional=True)
     if processes and client is not None:
         raise InvalidValueError(
             "The 'processes' parameter of sweep must be False with a 'client' (a Dask "

@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 
-from ..._validation import check_int, check_option, check_real
+from ..._validation import check_bool, check_int, check_option, check_real
 from ...errors import InvalidValueError
 from ...sim.batch import default_workers
 from .beyond import run_beyond
@@ -103,10 +103,8 @@ def reproduce(
     workers = default_workers() if workers is None else workers
     workers = check_int(workers, "workers", _OWNER, minimum=1)
 
-    if not isinstance(converged, bool):
-        raise InvalidValueError(
-            f"The 'converged' parameter of {_OWNER} must be a bool. Got {converged!r} instead."
-        )
+    for name, flag in (("sensitivity", sensitivity), ("beyond", beyond), ("converged", converged)):
+        check_bool(flag, name, _OWNER)
     converged_dt = converged_period(dt) if converged else None
     if sensitivity:
         runs = RunMatrix.build(
