@@ -12,10 +12,10 @@ import flexarm as fa
 from flexarm.control.adaptive import FuzzyAdaptiveJTPD, tip_deflections
 from flexarm.control.controllers import JacobianTransposePD
 from flexarm.control.signals import reference_size
+from flexarm.errors import ScenarioError
 from flexarm.fuzzy import FuzzySystem, Rule, Triangle, Variable, paper_system
 from flexarm.sim import simulate
 from flexarm.sim.scenario import Scenario
-from flexarm.sim.scenario_schema import ScenarioError
 
 
 @pytest.fixture(scope="module")

@@ -10,8 +10,8 @@ import flexarm as fa
 from flexarm.cli import main
 from flexarm.control.lqg import LQG
 from flexarm.control.reflected import ReflectedTipPD
+from flexarm.errors import ScenarioError
 from flexarm.sim.scenario import Scenario
-from flexarm.sim.scenario_schema import ScenarioError
 
 
 def run(capsys, *argv):

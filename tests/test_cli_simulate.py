@@ -4,9 +4,9 @@ one-line errors with status 2 and no files, divergence with status 1."""
 from __future__ import annotations
 
 import json
-import re
 import math
 import pathlib
+import re
 import shutil
 import subprocess
 import sys

@@ -14,8 +14,8 @@ import flexarm as fa
 from flexarm.cli import main
 from flexarm.control.controllers import CompiledController
 from flexarm.control.custom import call_factory, is_factory_spec, load_factory
+from flexarm.errors import ScenarioError
 from flexarm.sim.scenario import Scenario, load_scenario
-from flexarm.sim.scenario_schema import ScenarioError
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "my_controller.toml"

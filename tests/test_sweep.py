@@ -15,14 +15,13 @@ import numpy as np
 import pytest
 
 import flexarm
-from flexarm.errors import InvalidTypeError, InvalidValueError
+from flexarm.errors import InvalidTypeError, InvalidValueError, SweepError, SweepTypeError
 from flexarm.sweeps import driver, execute
 from flexarm.sweeps.distributions import Choice, Integers, LogUniform, Normal, Uniform, key_rng
 from flexarm.sweeps.driver import SweepInterrupted, sweep
 from flexarm.sweeps.execute import prefer_processes
 from flexarm.sweeps.journal import JOURNAL_FILE, Journal, read_journal
 from flexarm.sweeps.keys import KeyPathError, parse_key, run_id, with_changes
-from flexarm.sweeps.reader import SweepError, SweepTypeError
 from flexarm.sweeps.spec import METRICS, SweepSpec
 from flexarm.sweeps.table import SweepTable
 

@@ -78,7 +78,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     try:
         return _run(args)
     except KeyboardInterrupt as exc:  # before or after the runs (during them: below)
-        from ..sweeps.driver import SweepInterrupted
+        from ..errors import SweepInterrupted
 
         if isinstance(exc, SweepInterrupted) and exc.journal is not None:
             print(
@@ -92,9 +92,10 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..sweeps.cluster import ClusterError, connect
+    from ..errors import ClusterError, OutputDirectoryError
+    from ..sweeps.cluster import connect
     from ..sweeps.driver import summary, sweep
-    from ..sweeps.journal import OutputDirectoryError, check_output_directory
+    from ..sweeps.journal import check_output_directory
     from ..sweeps.spec import load_sweep
     from ..sweeps.table import PARQUET_EXTRA, have_pyarrow
 

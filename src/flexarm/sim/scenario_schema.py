@@ -127,20 +127,17 @@ Examples
 >>> Scenario.from_dict({"trajectory": {"sidee": 1.0}}, source="s.toml")  # doctest: +ELLIPSIS
 Traceback (most recent call last):
 ...
-flexarm.sim.scenario_schema.ScenarioError: s.toml: unknown key 'trajectory.sidee' (Square takes ...)
+flexarm.errors.ScenarioError: s.toml: unknown key 'trajectory.sidee' (Square takes ...)
 """
 
 from __future__ import annotations
 
-import dataclasses
 import os
-import re
-import tomllib
-from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
-from typing import Any, NoReturn
+from collections.abc import Mapping
+from typing import Any
 
-from ..errors import InvalidValueError
+from .._config import ConfigReader, read_toml
+from ..errors import ScenarioError
 
 __all__ = [
     "CONTROLLERS",
@@ -169,97 +166,25 @@ DELAY_MODELS = ("seed", "dispersive")
 NOISE_KEYS = ("noise_std", "rate_noise_std", "quantization", "rate_quantization")
 
 DEFAULT_KIND = {"trajectory": "square", "sensor": "joint", "controller": "pd", "shaper": "none"}
-_PARAMETER = re.compile(r"The '(\w+)' parameter")
 
 
-class ScenarioError(InvalidValueError):
-    """A scenario that cannot be built.
-
-    Attributes
-    ----------
-    source : str
-        Where the scenario came from (the file name).
-    key : str or None
-        Dotted key of the offending entry (``"trajectory.side"``,
-        ``"arm.links[1].length"``), the section, or None for the whole file.
-    reason : str
-        The problem, without the source and key.
-    """
-
-    def __init__(self, source: str, key: str | None, reason: str, *, show_key: bool = True):
-        self.source = source
-        self.key = key
-        self.reason = reason
-        where = f"{key}: " if key and show_key else ""
-        super().__init__(f"{source}: {where}{reason}")
-
-
-# ------------------------------------------------------------------ reading
-class ScenarioReader:
-    """Checks a scenario mapping and reports problems against its source."""
+class ScenarioReader(ConfigReader):
+    """Checks a scenario mapping and reports problems against its source: every
+    problem, a wrong value or an entry of the wrong type, is a :class:`ScenarioError`."""
 
     def __init__(self, source: str):
-        self.source = source
+        super().__init__(source, ScenarioError)
 
-    def fail(self, key: str | None, reason: str, *, show_key: bool = True) -> NoReturn:
-        raise ScenarioError(self.source, key, reason, show_key=show_key)
-
-    def table(self, data: Mapping[str, Any], key: str, prefix: str = "") -> dict[str, Any]:
-        value = data.get(key, {})
-        name = f"{prefix}{key}"
-        if not isinstance(value, Mapping):
-            self.fail(name, f"must be a table ([{name}]). Got {value!r} instead.")
-        return dict(value)
-
-    def keys(
-        self, table: Mapping[str, Any], prefix: str, allowed: tuple[str, ...], what: str
-    ) -> None:
-        for key in table:
-            if key not in allowed:
-                self.fail(
-                    f"{prefix}.{key}",
-                    f"unknown key '{prefix}.{key}' ({what} takes {', '.join(allowed)})",
-                    show_key=False,
-                )
-
-    @contextmanager
-    def library(self, prefix: str, table: Mapping[str, Any] | None = None) -> Iterator[None]:
-        """Report the library's TypeError/ValueError against the key it names."""
-        try:
-            yield
-        except ScenarioError:
-            raise
-        except (TypeError, ValueError) as exc:
-            m = _PARAMETER.search(str(exc))
-            key = prefix
-            if m is not None and table is not None and m[1] in table:
-                key = f"{prefix}.{m[1]}"
-            self.fail(key, str(exc))
-
-    def build(self, cls: type, table: Mapping[str, Any], prefix: str, *, kind: bool = False) -> Any:
-        """``cls(**table)`` for a dataclass, with unknown and missing keys named
-        (``kind``: the table also holds the ``kind`` key that chose ``cls``)."""
-        fields = [f for f in dataclasses.fields(cls) if f.init]
-        allowed = tuple(f.name for f in fields)
-        params = {k: v for k, v in table.items() if not (kind and k == "kind")}
-        self.keys(params, prefix, allowed, cls.__name__)
-        required = [
-            f.name
-            for f in fields
-            if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
-        ]
-        for name in required:
-            if name not in params:
-                needs = ", ".join(required)
-                self.fail(prefix, f"missing key '{prefix}.{name}' ({cls.__name__} needs {needs})")
-        with self.library(prefix, params):
-            return cls(**params)
-
-    def kind(self, table: Mapping[str, Any], prefix: str, options: tuple[str, ...]) -> str:
-        value = table.get("kind", DEFAULT_KIND.get(prefix, options[0]))
-        if not isinstance(value, str) or value not in options:
-            self.fail(f"{prefix}.kind", f"must be one of {options}. Got {value!r} instead.")
-        return value
+    def kind(
+        self,
+        table: Mapping[str, Any],
+        prefix: str,
+        options: tuple[str, ...],
+        default: str | None = None,
+    ) -> str:
+        """The section's ``kind`` (the section's default if absent), one of ``options``."""
+        fallback = DEFAULT_KIND.get(prefix, options[0]) if default is None else default
+        return super().kind(table, prefix, options, fallback)
 
 
 def read_scenario(path: str | os.PathLike[str]) -> dict[str, Any]:
@@ -270,20 +195,7 @@ def read_scenario(path: str | os.PathLike[str]) -> dict[str, Any]:
     ScenarioError
         If the file cannot be read or is not valid TOML.
     """
-    source = os.fspath(path)
-    try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
-    except FileNotFoundError:
-        raise ScenarioError(source, None, "no such file") from None
-    except IsADirectoryError:
-        raise ScenarioError(source, None, "a directory, not a scenario file") from None
-    except OSError as exc:
-        raise ScenarioError(source, None, f"cannot read the file: {exc.strerror or exc}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(source, None, f"not valid TOML: {exc}") from None
-    except UnicodeDecodeError:
-        raise ScenarioError(source, None, "not valid TOML: not UTF-8 text") from None
+    return read_toml(path, ScenarioError, "scenario file")
 
 
 def apply_overrides(data: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:

@@ -61,7 +61,7 @@ import socket
 from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING
 
-from ..errors import FlexarmError, InvalidValueError
+from ..errors import ClusterError, InvalidValueError
 from .execute import Item, default_chunk_size, run_chunk
 from .records import Record
 
@@ -78,11 +78,6 @@ __all__ = [
 
 DASK_EXTRA = "pip install 'flexarm[dask]'"
 """What installs dask.distributed (and pyarrow)."""
-
-
-class ClusterError(FlexarmError, RuntimeError):
-    """A task failed on the cluster for another reason than its runs (a worker lost
-    too often, a worker without flexarm). The runs finished before are in the journal."""
 
 
 def have_distributed() -> bool:

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 from .._io import JSONValue, json_ready
 from .._validation import check_bool, check_int
 from .._version import __version__
-from ..errors import InvalidValueError
+from ..errors import InvalidValueError, SweepError, SweepInterrupted
 from ..sim.batch import default_workers
 from .cluster import iter_cluster_records
 from .execute import Item, iter_process_records, iter_records, prefer_processes
@@ -40,7 +40,6 @@ from .journal import (
     check_output_directory,
     write_json,
 )
-from .reader import SweepError
 from .records import RUN_SOURCE, Record
 from .spec import SweepSpec, load_sweep
 from .table import PARQUET_EXTRA, SweepTable, have_pyarrow
@@ -62,22 +61,6 @@ CSV_FILE = "runs.csv"
 PARQUET_FILE = "runs.parquet"
 SUMMARY_FILE = "summary.json"
 _OWNER = "sweep"
-
-
-class SweepInterrupted(KeyboardInterrupt):
-    """A sweep stopped by Ctrl-C; its journal holds every run finished before.
-
-    Attributes
-    ----------
-    finished, total : int
-        Distinct runs finished (journal included) and in the sweep.
-    journal : Path or None
-        The journal (None without an output directory).
-    """
-
-    def __init__(self, finished: int, total: int, journal: Path | None):
-        self.finished, self.total, self.journal = finished, total, journal
-        super().__init__(f"{finished} of {total} runs finished")
 
 
 def sweep(
@@ -260,8 +243,8 @@ def check_runs(spec: SweepSpec) -> None:
         take (a key that only some kinds take: sweep it in a ``[[grid]]`` of its
         own with those kinds).
     """
+    from ..errors import ScenarioError
     from ..sim.scenario import Scenario
-    from ..sim.scenario_schema import ScenarioError
 
     def reason(exc: ScenarioError) -> str:
         text = str(exc)

@@ -27,7 +27,7 @@ from types import TracebackType
 
 from .._io import atomic_path
 from .._version import __version__
-from ..errors import InvalidValueError
+from ..errors import OutputDirectoryError
 from .records import Record
 
 __all__ = [
@@ -43,10 +43,6 @@ __all__ = [
 JOURNAL_FILE = "journal.jsonl"
 SWEEP_FILE = "sweep.json"
 _FIELDS = ("run_id", "status", "message", "sim_time_s", "wall_time_s", "metrics", "flexarm")
-
-
-class OutputDirectoryError(InvalidValueError):
-    """An output directory that cannot take a sweep's results."""
 
 
 def check_output_directory(out: Path) -> bool:

@@ -114,8 +114,7 @@ def _float(value: object) -> float:
 
 def _message(exc: BaseException) -> str:
     """One line: the scenario error without its source, others with their type."""
-    from ..errors import FlexarmError
-    from ..sim.scenario_schema import ScenarioError
+    from ..errors import FlexarmError, ScenarioError
 
     text = str(exc)
     if isinstance(exc, ScenarioError) and text.startswith(f"{exc.source}: "):

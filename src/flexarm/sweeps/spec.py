@@ -51,10 +51,12 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 
-from ..sim.scenario_schema import SECTIONS, ScenarioError, apply_overrides, read_scenario
+from .._config import read_toml
+from ..errors import ScenarioError, SweepError
+from ..sim.scenario_schema import SECTIONS, apply_overrides, read_scenario
 from .distributions import Distribution, distribution_from_table, key_rng
 from .keys import KeyPathError, flatten, parse_key, run_id, with_changes
-from .reader import SweepError, SweepReader, Value
+from .reader import SweepReader, Value
 
 __all__ = [
     "MAX_RUNS",
@@ -312,7 +314,7 @@ class SweepSpec:
                     None,
                     f"unknown {what} '{name}' (a sweep file takes {', '.join(_FILE_SECTIONS)})",
                 )
-        options = r.table(data.get("sweep", {}), "sweep")
+        options = r.as_table(data.get("sweep", {}), "sweep")
         r.keys(options, "sweep", ("metrics",))
         metrics = _metrics(r, options.get("metrics", list(METRICS)))
         base = _base(r, data.get("base", {}), Path(root) if root is not None else Path.cwd())
@@ -330,10 +332,7 @@ def read_sweep(path: str | os.PathLike[str]) -> dict[str, object]:
     SweepError
         If the file cannot be read or is not valid TOML.
     """
-    try:
-        return read_scenario(path)
-    except ScenarioError as exc:
-        raise SweepError(exc.source, None, exc.reason) from None
+    return read_toml(path, SweepError, "sweep file")
 
 
 def load_sweep(path: str | os.PathLike[str]) -> SweepSpec:
@@ -413,7 +412,7 @@ def _grid(r: SweepReader, table: Mapping[str, object], name: str) -> Grid:
 
 
 def _monte_carlo(r: SweepReader, value: object) -> MonteCarlo:
-    table = r.table(value, "monte_carlo")
+    table = r.as_table(value, "monte_carlo")
     for required in ("n", "seed"):
         if required not in table:
             why = "the number of draws" if required == "n" else "the draws are reproducible from it"

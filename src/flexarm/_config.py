@@ -1,0 +1,229 @@
+"""Reading TOML configuration files (scenarios, sweeps, calibrations) and checking them.
+
+One way to read a file (:func:`read_toml`) and one reader of its tables
+(:class:`ConfigReader`) for every kind of file flexarm takes, so that every
+problem is reported alike: one line that starts with the file and names the
+dotted key, e.g. ``sweep.toml: monte_carlo.n: must be an integer >= 1. Got 0
+instead.`` A kind of file gives the reader its error classes
+(:class:`flexarm.errors.ScenarioError`, :class:`flexarm.errors.SweepError`, ...),
+all :class:`flexarm.errors.ConfigError` with ``source``, ``key`` and ``reason``.
+
+No compiled code and no SciPy: the command line checks a file before anything
+heavy is imported.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import re
+import tomllib
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from typing import Any, NoReturn
+
+from .errors import ConfigError, ConfigFileError
+
+__all__ = ["ConfigReader", "TomlValue", "read_toml"]
+
+TomlValue = str | int | float | bool | list["TomlValue"] | dict[str, "TomlValue"]
+"""A value a TOML file can hold (dates and times excepted)."""
+
+_PARAMETER = re.compile(r"The '(\w+)' parameter")
+
+
+def read_toml(
+    path: str | os.PathLike[str],
+    error: type[ConfigFileError] = ConfigError,
+    what: str = "configuration file",
+) -> dict[str, Any]:
+    """The raw mapping of a TOML file (not yet checked).
+
+    Parameters
+    ----------
+    path : str or path-like
+    error : type of ConfigFileError
+        Raised (the source being the path) if the file cannot be read or is not
+        valid TOML.
+    what : str
+        What the file should have been, for the message of a directory.
+    """
+    source = os.fspath(path)
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise error(source, None, "no such file") from None
+    except IsADirectoryError:
+        raise error(source, None, f"a directory, not a {what}") from None
+    except OSError as exc:
+        raise error(source, None, f"cannot read the file: {exc.strerror or exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise error(source, None, f"not valid TOML: {exc}") from None
+    except UnicodeDecodeError:
+        raise error(source, None, "not valid TOML: not UTF-8 text") from None
+
+
+class ConfigReader:
+    """Checks the tables of one file and reports problems against its source.
+
+    Parameters
+    ----------
+    source : str
+        Named at the start of every message (the file name).
+    error, type_error : type of ConfigError
+        Raised for a wrong value and for a wrong type (a kind of file may report
+        both as one class).
+    whole : str
+        What the file is called where a key of its top level is unknown.
+    """
+
+    def __init__(
+        self,
+        source: str,
+        error: type[ConfigFileError] = ConfigError,
+        type_error: type[ConfigFileError] | None = None,
+        whole: str = "the file",
+    ) -> None:
+        self.source = source
+        self.error = error
+        self.type_error = error if type_error is None else type_error
+        self.whole = whole
+
+    def fail(self, key: str | None, reason: str, *, show_key: bool = True) -> NoReturn:
+        """Raise the file's error for a wrong value at ``key``."""
+        raise self.error(self.source, key, reason, show_key=show_key)
+
+    def fail_type(self, key: str | None, reason: str) -> NoReturn:
+        """Raise the file's error for an entry of the wrong type at ``key``."""
+        raise self.type_error(self.source, key, reason)
+
+    def table(self, data: Mapping[str, Any], key: str, prefix: str = "") -> dict[str, Any]:
+        """``data[key]`` (``{}`` if absent) as a table, else a type error naming it."""
+        return self.as_table(data.get(key, {}), f"{prefix}{key}")
+
+    def as_table(self, value: object, key: str) -> dict[str, Any]:
+        """``value`` if it is a table, else a type error naming ``key``."""
+        if not isinstance(value, Mapping):
+            self.fail_type(key, f"must be a table ([{key}]). Got {value!r} instead.")
+        return dict(value)
+
+    def keys(
+        self,
+        table: Mapping[str, Any],
+        prefix: str,
+        allowed: tuple[str, ...],
+        what: str | None = None,
+    ) -> None:
+        """Refuse any key of ``table`` (the table at ``prefix``) not in ``allowed``;
+        ``what`` names the taker (default the table, or the whole file)."""
+        taker = what or prefix or self.whole
+        for key in table:
+            if key not in allowed:
+                where = f"{prefix}.{key}" if prefix else key
+                self.fail(
+                    where,
+                    f"unknown key '{where}' ({taker} takes {', '.join(allowed)})",
+                    show_key=False,
+                )
+
+    @contextmanager
+    def library(self, prefix: str, table: Mapping[str, Any] | None = None) -> Iterator[None]:
+        """Report the library's TypeError/ValueError against the key it names."""
+        try:
+            yield
+        except ConfigFileError:
+            raise
+        except (TypeError, ValueError) as exc:
+            m = _PARAMETER.search(str(exc))
+            key = prefix
+            if m is not None and table is not None and m[1] in table:
+                key = f"{prefix}.{m[1]}"
+            if isinstance(exc, TypeError):
+                self.fail_type(key, str(exc))
+            self.fail(key, str(exc))
+
+    def build(self, cls: type, table: Mapping[str, Any], prefix: str, *, kind: bool = False) -> Any:
+        """``cls(**table)`` for a dataclass, with unknown and missing keys named
+        (``kind``: the table also holds the ``kind`` key that chose ``cls``)."""
+        fields = [f for f in dataclasses.fields(cls) if f.init]
+        allowed = tuple(f.name for f in fields)
+        params = {k: v for k, v in table.items() if not (kind and k == "kind")}
+        self.keys(params, prefix, allowed, cls.__name__)
+        required = [
+            f.name
+            for f in fields
+            if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+        ]
+        for name in required:
+            if name not in params:
+                needs = ", ".join(required)
+                self.fail(prefix, f"missing key '{prefix}.{name}' ({cls.__name__} needs {needs})")
+        with self.library(prefix, params):
+            return cls(**params)
+
+    def kind(
+        self,
+        table: Mapping[str, Any],
+        prefix: str,
+        options: tuple[str, ...],
+        default: str | None = None,
+    ) -> str:
+        """The table's ``kind`` (``default``, else the first option, if absent), one of
+        ``options``."""
+        value = table.get("kind", options[0] if default is None else default)
+        if not isinstance(value, str) or value not in options:
+            self.fail(f"{prefix}.kind", f"must be one of {options}. Got {value!r} instead.")
+        return value
+
+    def integer(self, value: object, key: str, minimum: int) -> int:
+        """``value`` as an int ``>= minimum``."""
+        if isinstance(value, bool) or not isinstance(value, int):
+            self.fail_type(key, f"must be an integer >= {minimum}. Got {value!r} instead.")
+        if value < minimum:
+            self.fail(key, f"must be an integer >= {minimum}. Got {value!r} instead.")
+        return int(value)
+
+    def real(self, value: object, key: str) -> float:
+        """``value`` as a finite float (an int is accepted)."""
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            self.fail_type(key, f"must be a real number. Got {value!r} instead.")
+        x = float(value)
+        if not math.isfinite(x):
+            self.fail(key, f"must be finite. Got {value!r} instead.")
+        return x
+
+    def string(self, value: object, key: str) -> str:
+        """``value`` if it is a non-empty string."""
+        if not isinstance(value, str) or not value:
+            self.fail_type(key, f"must be a non-empty string. Got {value!r} instead.")
+        return value
+
+    def value(self, value: object, key: str) -> TomlValue:
+        """``value`` as a plain TOML value (NumPy scalars to Python, tuples to lists).
+
+        Dates and times and other objects are refused: what is read must travel as
+        JSON (to a journal, to a cluster).
+        """
+        if isinstance(value, bool | str):
+            return value
+        if isinstance(value, int | float):
+            return value
+        item = getattr(value, "item", None)  # a NumPy scalar
+        if callable(item) and type(value).__module__ == "numpy" and getattr(value, "ndim", 1) == 0:
+            return self.value(item(), key)
+        if isinstance(value, list | tuple):
+            return [self.value(v, f"{key}[{k}]") for k, v in enumerate(value)]
+        if isinstance(value, Mapping):
+            out: dict[str, TomlValue] = {}
+            for name, v in value.items():
+                if not isinstance(name, str):
+                    self.fail_type(key, f"keys must be strings. Got {name!r} instead.")
+                out[name] = self.value(v, f"{key}.{name}")
+            return out
+        self.fail_type(
+            key,
+            "must be a number, a string, a boolean, an array or a table. "
+            f"Got {type(value).__name__} {value!r} instead.",
+        )
