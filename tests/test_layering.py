@@ -64,6 +64,7 @@ WITHIN: dict[str, list[str]] = {
     "control": [
         "signals",
         "_path_kernels",
+        "_gains",
         "trajectories",
         "shapers",
         "statespace",

@@ -34,7 +34,6 @@ from dataclasses import dataclass
 
 import numba as nb
 import numpy as np
-from numba import carray  # type: ignore[attr-defined]
 from numba.core.ccallback import CFunc
 from numpy.typing import ArrayLike, NDArray
 
@@ -44,12 +43,13 @@ from ..fuzzy import CompiledFuzzySystem, FuzzySystem, paper_system, workspace_si
 from ..fuzzy.compiled import _evaluate_into, _unpack_system, pack_system
 from ..model.plant import Plant
 from ..sensing.sensors import Sensor
+from ._gains import gain_matrix
 from .controllers import (
-    CONTROL_SIGNATURE,
     Controller,
-    _gain_matrix,
+    JacobianTransposePD,
     jacobian_transpose_law,
     operational_lengths,
+    wrap_control_function,
 )
 from .signals import y_modes
 
@@ -92,16 +92,7 @@ def _fuzzy_jt_pd(
     jacobian_transpose_law(y, r, p, g if law == 0.0 else 1.0, g, tau)
 
 
-@nb.cfunc(CONTROL_SIGNATURE, cache=True)
-def fuzzy_jt_pd_cfunc(t, y, ny, r, nr, p, n_p, s, ns, tau, nt):  # type: ignore[no-untyped-def]
-    _fuzzy_jt_pd(  # pragma: no cover - compiled
-        t,
-        carray(y, ny),
-        carray(r, nr),
-        carray(p, n_p),
-        carray(s, ns),
-        carray(tau, nt),
-    )
+fuzzy_jt_pd_cfunc = wrap_control_function(_fuzzy_jt_pd, cache=True)
 
 
 def tip_deflections(arm: Plant) -> F64:
@@ -172,8 +163,6 @@ class FuzzyAdaptiveJTPD(Controller):
         cls, arm: Plant, zeta: float = 0.707, *, ks: float = 1.0, law: str = "scaled"
     ) -> FuzzyAdaptiveJTPD:
         """The paper's gains (as :meth:`JacobianTransposePD.from_arm`) with adaptation."""
-        from .controllers import JacobianTransposePD
-
         base = JacobianTransposePD.from_arm(arm, zeta)
         return cls(kp=base.kp, kd=base.kd, ks=ks, law=law)
 
@@ -227,8 +216,8 @@ class FuzzyAdaptiveJTPD(Controller):
 
     def parameters_for(self, arm: Plant, sensor: Sensor | None) -> F64:
         owner = "FuzzyAdaptiveJTPD"
-        kp = _gain_matrix(self.kp, "kp", owner)
-        kd = _gain_matrix(self.kd, "kd", owner)
+        kp = gain_matrix(self.kp, "kp", owner)
+        kd = gain_matrix(self.kd, "kd", owner)
         compiled = self._checked_system(arm)
         lengths = operational_lengths(arm, sensor)
         tips = tip_deflections(arm)

@@ -43,7 +43,6 @@ from typing import NamedTuple
 
 import numba as nb
 import numpy as np
-from numba import carray  # type: ignore[attr-defined]
 from numba.core.ccallback import CFunc
 from numpy.typing import NDArray
 
@@ -54,7 +53,7 @@ from ..fuzzy.compiled import _evaluate_into, _unpack_system, pack_system
 from ..model.arm import FlexibleArm
 from ..model.plant import Plant
 from ..sensing.sensors import JointSensor, PointSensor, Sensor, TipSensor
-from .controllers import CONTROL_SIGNATURE, Controller
+from .controllers import Controller, wrap_control_function
 from .design import kalman, lqr
 from .linearize import linearize
 from .signals import (
@@ -161,11 +160,7 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
         tau[a] = gain * acc
 
 
-@nb.cfunc(CONTROL_SIGNATURE, cache=True)
-def lqg_cfunc(t, y, ny, r, nr, p, n_p, s, ns, tau, nt):  # type: ignore[no-untyped-def]
-    lqg_law(  # pragma: no cover - compiled
-        t, carray(y, ny), carray(r, nr), carray(p, n_p), carray(s, ns), carray(tau, nt)
-    )
+lqg_cfunc = wrap_control_function(lqg_law, cache=True)
 
 
 @dataclass(frozen=True)
