@@ -65,6 +65,7 @@ WITHIN: dict[str, list[str]] = {
         "signals",
         "_path_kernels",
         "_gains",
+        "_lqg_layout",
         "trajectories",
         "shapers",
         "statespace",
