@@ -108,7 +108,7 @@ WITHIN: dict[str, list[str]] = {
         "cluster",
         "driver",
     ],
-    "fuzzy": ["sets", "compiled", "system", "paper"],
+    "fuzzy": ["sets", "_kernels", "compiled", "system", "paper"],
     "envs": ["config", "kernel", "core", "env", "vector"],
     "ident": [
         "options",

@@ -40,7 +40,8 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..fuzzy import CompiledFuzzySystem, FuzzySystem, paper_system, workspace_size
-from ..fuzzy.compiled import _evaluate_into, _unpack_system, pack_system
+from ..fuzzy._kernels import evaluate_into_kernel, unpack_system_kernel
+from ..fuzzy.compiled import pack_system
 from ..model.plant import Plant
 from ..sensing.sensors import Sensor
 from ._gains import gain_matrix
@@ -76,7 +77,7 @@ def _fuzzy_jt_pd(
     lam0 = p[o + 2]
     m = int(p[o + 3])
     o += _HEAD
-    system = _unpack_system(p, o + n * m)
+    system = unpack_system_kernel(p, o + n * m)
     # scratch: s[0] = last lambda, s[1] = last gain, s[2:2+n] = FLS inputs, then the workspace
     x = s[2 : 2 + n]
     modal = y[y_modes(n) :]
@@ -85,7 +86,7 @@ def _fuzzy_jt_pd(
         for j in range(m):
             acc += p[o + i * m + j] * modal[j]
         x[i] = ks * acc
-    lam = _evaluate_into(system, x, s[2 + n :])
+    lam = evaluate_into_kernel(system, x, s[2 + n :])
     g = lam / lam0
     s[0] = lam
     s[1] = g

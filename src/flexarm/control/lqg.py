@@ -49,7 +49,8 @@ from numpy.typing import NDArray
 from .._validation import check_int, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..fuzzy import FuzzySystem, paper_system, workspace_size
-from ..fuzzy.compiled import _evaluate_into, _unpack_system, pack_system
+from ..fuzzy._kernels import evaluate_into_kernel, unpack_system_kernel
+from ..fuzzy.compiled import pack_system
 from ..model.arm import FlexibleArm
 from ..model.plant import Plant
 from ..sensing.sensors import JointSensor, PointSensor, Sensor, TipSensor
@@ -164,8 +165,8 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
             for q in range(nd):
                 acc += p[fo + i * nd + q] * xh[q]
             x_in[i] = ks * acc
-        system = _unpack_system(p, fo + nu * nd)
-        gain = gain * _evaluate_into(system, x_in, s[s_work:]) / lam0
+        system = unpack_system_kernel(p, fo + nu * nd)
+        gain = gain * evaluate_into_kernel(system, x_in, s[s_work:]) / lam0
         s[s_gain] = gain  # the last gain, for the record
     for a in range(nu):
         acc = 0.0
