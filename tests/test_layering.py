@@ -63,10 +63,12 @@ WITHIN: dict[str, list[str]] = {
     "sensing": ["delays", "sensors"],
     "control": [
         "signals",
+        "_piecewise",
         "_path_kernels",
         "_gains",
         "_lqg_layout",
         "trajectories",
+        "_ei",
         "shapers",
         "statespace",
         "controllers",
