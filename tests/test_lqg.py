@@ -227,7 +227,11 @@ def test_fuzzy_adaptation_off_is_the_plain_law_and_gain_scales():
 def test_lqg_tracks_with_the_tip_sensor_alone():
     res = simulate(ARM, LQG(), Square(), sensor=TipSensor(), smoothing=0.1, duration=6.0)
     m = res.metrics()
-    assert m["rms_error_m"] < 0.05 and m["max_torque_Nm"] < 100  # the first 6 s of 20
+    # regression bounds: these 6 s (of the square's 20) reach 3.42 cm rms, 10.1 cm at
+    # most and 25.0 N m at most; each bound is 1.25 times that
+    assert m["rms_error_m"] < 1.25 * 0.0342
+    assert m["max_error_m"] < 1.25 * 0.101
+    assert m["max_torque_Nm"] < 1.25 * 25.0
     assert res.info["feedforward"] is True
     jt = JacobianTransposePD.from_arm(ARM)
     with pytest.raises(fa.SimulationError):  # what the paper's law does with it
