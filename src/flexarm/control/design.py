@@ -136,9 +136,9 @@ def lqr(sys: StateSpace, Q: ArrayLike, R: ArrayLike) -> Regulator:
     failure = f"The 'Q' parameter of {owner} gives no stabilising solution with this model"
     s = _riccati(sys, a, b, q, r, f"{failure} (is (A, B) stabilisable and (A, Q) detectable?)")
     if sys.dt is None:
-        k = np.linalg.solve(r, b.T @ s)
+        k: F64 = np.asarray(np.linalg.solve(r, b.T @ s), dtype=np.float64)
     else:
-        k = np.linalg.solve(r + b.T @ s @ b, b.T @ s @ a)
+        k = np.asarray(np.linalg.solve(r + b.T @ s @ b, b.T @ s @ a), dtype=np.float64)
     poles = np.asarray(np.linalg.eigvals(a - b @ k), dtype=np.complex128)
     return Regulator(K=k, S=s, poles=poles)
 
@@ -167,10 +167,10 @@ def kalman(sys: StateSpace, G: ArrayLike, Qn: ArrayLike, Rn: ArrayLike) -> Estim
     failure = f"The 'Qn' parameter of {owner} gives no stabilising filter with this model"
     p = _riccati(sys, a.T, c.T, gqg, rn, f"{failure} (is (A, G) stabilisable?)")
     if sys.dt is None:
-        gain = np.linalg.solve(rn, c @ p).T
+        gain: F64 = np.asarray(np.linalg.solve(rn, c @ p).T, dtype=np.float64)
         m = gain
     else:
-        m = np.linalg.solve(c @ p @ c.T + rn, c @ p).T
+        m = np.asarray(np.linalg.solve(c @ p @ c.T + rn, c @ p).T, dtype=np.float64)
         gain = a @ m
     poles = np.asarray(np.linalg.eigvals(a - gain @ c), dtype=np.complex128)
     return Estimator(L=gain, M=m, P=p, poles=poles)
