@@ -1,4 +1,4 @@
-"""The fuzzy adaptive Jacobian-transpose law (paper §V.D, paper.md §4).
+"""The fuzzy adaptive Jacobian-transpose law (the paper's Sec. V.D).
 
 A Mamdani system (by default :func:`flexarm.fuzzy.paper_system`) reads the
 links' tip deflections and its output ``lambda`` scales the paper's
