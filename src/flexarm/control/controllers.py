@@ -186,7 +186,8 @@ class Controller:
     """Interface: what the simulator needs from a controller.
 
     Subclasses provide :attr:`cfunc` (a ``numba.cfunc`` with
-    :data:`CONTROL_SIGNATURE`), :meth:`parameters` (the ``params`` vector for a
+    :data:`CONTROL_SIGNATURE`, made from the law by :func:`wrap_control_function`),
+    :meth:`parameters` (the ``params`` vector for a
     given arm) and :meth:`initial_state` (the initial ``state`` vector).
     """
 
