@@ -3,8 +3,10 @@ line: the example runs, the options reach the factory, every failure is one line
 
 from __future__ import annotations
 
+import os
 import pathlib
 import re
+import subprocess
 import sys
 
 import numpy as np
@@ -12,9 +14,9 @@ import pytest
 
 import flexarm as fa
 from flexarm.cli import main
-from flexarm.control.controllers import CompiledController
+from flexarm.control.controllers import CompiledController, wrap_control_function
 from flexarm.control.custom import call_factory, is_factory_spec, load_factory
-from flexarm.errors import ScenarioError
+from flexarm.errors import InvalidTypeError, ScenarioError
 from flexarm.sim.scenario import Scenario, load_scenario
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -119,3 +121,63 @@ def test_the_spec_and_the_loader():
     joint_pd = load_factory("flexarm.control.controllers:JointPD")
     ctrl = call_factory(lambda arm, kp: joint_pd(kp=kp), "pd", fa.FlexibleArm.paper(), {"kp": 5.0})
     assert ctrl.kp == 5.0
+
+
+# ------------------------------------------------------------------ the compiled callback
+LAWS = """
+import numba as nb
+from flexarm.control.controllers import wrap_control_function
+
+@nb.njit(cache=True)
+def double(t, y, r, p, s, tau):
+    tau[0] = 2.0 * p[0]
+
+@nb.njit(cache=True)
+def triple(t, y, r, p, s, tau):
+    tau[0] = 3.0 * p[0]
+
+callbacks = [wrap_control_function(f, cache=True) for f in (double, triple)]
+"""
+
+RUN = """
+import ctypes, sys
+import numpy as np
+sys.path.insert(0, sys.argv[1])
+import laws
+
+p, tau, empty = np.array([1.5]), np.zeros(1), np.zeros(1)
+ptr = lambda a: a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+out = []
+for cf in laws.callbacks:
+    cf.ctypes(0.0, ptr(empty), 0, ptr(empty), 0, ptr(p), 1, ptr(empty), 0, ptr(tau), 1)
+    out.append(f"{tau[0]} {cf.cache_hits}")
+print(";".join(out))
+"""
+
+
+def test_wrapped_laws_are_cached_apart_and_read_back_in_a_new_process(tmp_path):
+    """Each law's callback has a cache entry of its own (two laws of one module do not
+    share one) that a second process loads instead of compiling again."""
+    (tmp_path / "laws.py").write_text(LAWS)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+
+    def run():
+        done = subprocess.run(
+            [sys.executable, "-c", RUN, str(tmp_path)],
+            env=env,
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        return done.stdout.strip()
+
+    assert run() == "3.0 0;4.5 0"  # compiled: 2 p and 3 p
+    assert run() == "3.0 1;4.5 1"  # read back from the cache, each its own
+
+
+def test_wrap_control_function_needs_a_compiled_law():
+    def plain(t, y, r, p, s, tau):
+        tau[0] = 0.0
+
+    with pytest.raises(InvalidTypeError, match=r"'fn' parameter of wrap_control_function"):
+        wrap_control_function(plain)

@@ -374,11 +374,28 @@ def test_vectorisation_and_broadcasting():
     assert fls.firing_strengths(d1, d2).shape == (4, 3, 9)
 
 
+def _face_means(fls: FuzzySystem, n: int) -> np.ndarray:
+    """The Python path's output on the n x n grid of the universes, averaged over each
+    cell's four corners (the value matplotlib colours a surface's face by), row-major
+    with the first input along the rows."""
+    g1, g2 = (np.linspace(*var.universe, n) for var in fls.inputs)
+    x1, x2 = np.meshgrid(g1, g2, indexing="ij")
+    z = fls(x1, x2, backend="numpy")
+    return ((z[:-1, :-1] + z[1:, :-1] + z[:-1, 1:] + z[1:, 1:]) / 4).ravel()
+
+
 def test_plot_surface():
     import matplotlib.pyplot as plt
 
     ax, surf = plot_surface(paper_system(), n=11)
-    assert ax.name == "3d" and surf is not None
+    assert ax.name == "3d"
+    np.testing.assert_allclose(surf.get_array(), _face_means(paper_system(), 11), atol=1e-12)
+    assert (ax.get_xlabel(), ax.get_ylabel(), ax.get_zlabel()) == ("δ1 (m)", "δ2 (m)", "λ (-)")
+    # an asymmetric system: the first input runs along x, the surface is its output
+    fls = _random_system(np.random.default_rng(5), OPS[3])
+    ax, surf = plot_surface(fls, n=9)
+    np.testing.assert_allclose(surf.get_array(), _face_means(fls, 9), atol=1e-12)
+    assert (ax.get_xlabel(), ax.get_ylabel(), ax.get_zlabel()) == ("u", "v", "out")
     _fig, ax2 = plt.subplots()
     ax_out, contour = plot_surface(paper_system(), ax=ax2, n=11)
     assert ax_out is ax2
@@ -392,6 +409,11 @@ def test_plot_surface():
 
 def _x() -> Variable:
     return Variable("x", (0.0, 1.0), {"A": Triangle(0, 0.5, 1)})
+
+
+def _one_rule(**options: object) -> FuzzySystem:
+    """x -> x by the one rule A -> A, with ``options`` (operators, defuzzifier)."""
+    return FuzzySystem((_x(),), _x(), (Rule(("A",), "A"),), **options)
 
 
 @pytest.mark.parametrize(
@@ -417,26 +439,10 @@ def _x() -> Variable:
         (lambda: FuzzySystem((_x(),), _x(), (Rule(("A", "A"), "A"),)), ValueError, "rules"),
         (lambda: FuzzySystem((_x(),), _x(), ()), ValueError, "rules"),
         (lambda: FuzzySystem((_x(),), "y", (Rule(("A",), "A"),)), TypeError, "output"),
-        (
-            lambda: FuzzySystem((_x(),), _x(), (Rule(("A",), "A"),), and_op="max"),
-            ValueError,
-            "and_op",
-        ),
-        (
-            lambda: FuzzySystem((_x(),), _x(), (Rule(("A",), "A"),), implication="lukasiewicz"),
-            ValueError,
-            "implication",
-        ),
-        (
-            lambda: FuzzySystem((_x(),), _x(), (Rule(("A",), "A"),), aggregation="sum"),
-            ValueError,
-            "aggregation",
-        ),
-        (
-            lambda: FuzzySystem((_x(),), _x(), (Rule(("A",), "A"),), defuzzifier="lom"),
-            ValueError,
-            "defuzzifier",
-        ),
+        (lambda: _one_rule(and_op="max"), ValueError, "and_op"),
+        (lambda: _one_rule(implication="lukasiewicz"), ValueError, "implication"),
+        (lambda: _one_rule(aggregation="sum"), ValueError, "aggregation"),
+        (lambda: _one_rule(defuzzifier="lom"), ValueError, "defuzzifier"),
         (lambda: paper_system("som"), ValueError, "defuzzifier"),
         (lambda: paper_system()(1.0), ValueError, "inputs"),
         (lambda: paper_system()([1.0, 2.0], [1.0, 2.0, 3.0]), ValueError, "inputs"),

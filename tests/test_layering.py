@@ -64,8 +64,12 @@ WITHIN: dict[str, list[str]] = {
     "control": [
         "options",
         "signals",
+        "_piecewise",
         "_path_kernels",
+        "_gains",
+        "_lqg_layout",
         "trajectories",
+        "_ei",
         "shapers",
         "statespace",
         "controllers",
@@ -110,7 +114,7 @@ WITHIN: dict[str, list[str]] = {
         "cluster",
         "driver",
     ],
-    "fuzzy": ["sets", "compiled", "system", "paper"],
+    "fuzzy": ["sets", "_kernels", "compiled", "system", "paper"],
     "envs": ["config", "step", "core", "env", "vector"],
     "ident": [
         "options",

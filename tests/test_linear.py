@@ -108,7 +108,7 @@ def test_single_mode_zeros_match_the_closed_form():
     zeros = linearize(arm, output="tip").transmission_zeros(inputs=[0], outputs=[1])
     np.testing.assert_allclose(np.sort(zeros.real), [-expected, expected], rtol=1e-8)
     np.testing.assert_allclose(zeros.imag, 0.0, atol=1e-8 * expected)
-    assert expected == pytest.approx(33.1, abs=0.05)  # the figure the issue measured
+    assert expected == pytest.approx(33.1, abs=0.05)  # the figure the guide states, rad/s
 
 
 def continuum_zero():

@@ -15,9 +15,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from flexarm import FlexibleArm
+from flexarm.control._piecewise import COMPILED_FROM
 from flexarm.control.shapers import zv
 from flexarm.control.signals import r_acceleration, r_position, r_velocity
-from flexarm.control.trajectories import _COMPILED_FROM, Circle, Line, Square, Waypoints
+from flexarm.control.trajectories import Circle, Line, Square, Waypoints
 from flexarm.errors import InvalidValueError
 from flexarm.sim._reference_kernels import OK, SINGULAR, UNREACHABLE, joint_path_rows
 from flexarm.sim.references import BLOCK, ReferencePipeline, joint_path
@@ -44,7 +45,7 @@ def test_compiled_piecewise_path_matches_numpy(path):
     rng = np.random.default_rng(3)
     t = np.sort(rng.uniform(-1.0, path.duration + 1.0, 20_000))
     t[:3] = [0.0, path.duration, path.duration / 2]
-    assert t.shape[0] >= _COMPILED_FROM > 1000
+    assert t.shape[0] >= COMPILED_FROM > 1000
     compiled = path.evaluate(t)
     pieces = [path.evaluate(t[i : i + 1000]) for i in range(0, t.shape[0], 1000)]
     for j, got in enumerate(compiled):

@@ -11,17 +11,12 @@ import pytest
 from flexarm import FlexibleArm, Link
 from flexarm.control.trajectories import Circle, Line, Square, Waypoints
 from flexarm.sim.references import joint_reference
-
-H = 1e-5  # finite-difference step, s
+from helpers.control import central_difference
 
 
 @pytest.fixture(scope="module")
 def arm():
     return FlexibleArm.paper()
-
-
-def central_difference(fun, t, h=H):
-    return (fun(t + h) - fun(t - h)) / (2 * h)
 
 
 # ------------------------------------------------------------------ joint_reference

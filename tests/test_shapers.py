@@ -34,7 +34,7 @@ from flexarm.control.shapers import (
     zvd,
 )
 
-W0 = 12.281  # rad/s, the paper's first link mode (spec §1)
+W0 = 12.281  # rad/s, the paper's first clamped mode of a link (its Sec. III)
 DAMPINGS = (0.0, 0.02, 0.1, 0.3)
 
 

@@ -19,17 +19,12 @@ from flexarm.control.trajectories import (
     Waypoints,
     sample,
 )
-
-H = 1e-5  # finite-difference step, s
+from helpers.control import central_difference
 
 
 @pytest.fixture(scope="module")
 def arm():
     return FlexibleArm.paper()
-
-
-def central_difference(fun, t, h=H):
-    return (fun(t + h) - fun(t - h)) / (2 * h)
 
 
 def assert_derivatives(traj, t, atol=1e-6):

@@ -1,20 +1,29 @@
 """Compiled evaluation of piecewise straight paths (the square, polylines, waypoints).
 
-:func:`piecewise_path` is the compiled twin of the NumPy evaluation in
-:mod:`flexarm.control.trajectories` (which calls it for long time grids, where
-NumPy's temporaries dominate the cost of a simulation's set-up). Both follow
-the same formulas; the tests hold them together.
+:func:`piecewise_path` is the compiled twin of the NumPy evaluation
+(:func:`flexarm.control._piecewise.piecewise_numpy`): the paths of
+:mod:`flexarm.control.trajectories` call it on long time grids, where NumPy's
+temporaries dominate the cost of a simulation's set-up. Both follow the same
+formulas (the time scaling is one function, compiled here); the tests hold them
+together.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
+from ._piecewise import quintic_scaling
+
 __all__ = ["path_point", "piecewise_path"]
 
 F64 = NDArray[np.float64]
+
+_quintic: Callable[[float], tuple[float, float, float]]
+_quintic = nb.njit(cache=True, nogil=True, inline="always")(quintic_scaling)  # type: ignore[assignment]
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -37,9 +46,7 @@ def path_point(
     elif tau > 1.0:
         tau = 1.0
     if quintic:
-        s = tau**3 * (10.0 + tau * (-15.0 + 6.0 * tau))
-        ds = 30.0 * tau**2 * (1.0 - tau) ** 2
-        dds = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau)
+        s, ds, dds = _quintic(tau)
     else:
         s = tau
         ds = 1.0

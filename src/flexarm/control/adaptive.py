@@ -1,4 +1,4 @@
-"""The fuzzy adaptive Jacobian-transpose law (paper §V.D, paper.md §4).
+"""The fuzzy adaptive Jacobian-transpose law (the paper's Sec. V.D).
 
 A Mamdani system (by default :func:`flexarm.fuzzy.paper_system`) reads the
 links' tip deflections and its output ``lambda`` scales the paper's
@@ -34,22 +34,23 @@ from dataclasses import dataclass
 
 import numba as nb
 import numpy as np
-from numba import carray  # type: ignore[attr-defined]
 from numba.core.ccallback import CFunc
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..fuzzy import CompiledFuzzySystem, FuzzySystem, paper_system, workspace_size
-from ..fuzzy.compiled import _evaluate_into, _unpack_system, pack_system
+from ..fuzzy._kernels import evaluate_into_kernel, unpack_system_kernel
+from ..fuzzy.compiled import pack_system
 from ..model.plant import Plant
 from ..sensing.sensors import Sensor
+from ._gains import gain_matrix
 from .controllers import (
-    CONTROL_SIGNATURE,
     Controller,
-    _gain_matrix,
+    JacobianTransposePD,
     jacobian_transpose_law,
     operational_lengths,
+    wrap_control_function,
 )
 from .options import ADAPTATION_LAWS
 from .signals import y_modes
@@ -76,7 +77,7 @@ def _fuzzy_jt_pd(
     lam0 = p[o + 2]
     m = int(p[o + 3])
     o += _HEAD
-    system = _unpack_system(p, o + n * m)
+    system = unpack_system_kernel(p, o + n * m)
     # scratch: s[0] = last lambda, s[1] = last gain, s[2:2+n] = FLS inputs, then the workspace
     x = s[2 : 2 + n]
     modal = y[y_modes(n) :]
@@ -85,23 +86,14 @@ def _fuzzy_jt_pd(
         for j in range(m):
             acc += p[o + i * m + j] * modal[j]
         x[i] = ks * acc
-    lam = _evaluate_into(system, x, s[2 + n :])
+    lam = evaluate_into_kernel(system, x, s[2 + n :])
     g = lam / lam0
     s[0] = lam
     s[1] = g
     jacobian_transpose_law(y, r, p, g if law == 0.0 else 1.0, g, tau)
 
 
-@nb.cfunc(CONTROL_SIGNATURE, cache=True)
-def fuzzy_jt_pd_cfunc(t, y, ny, r, nr, p, n_p, s, ns, tau, nt):  # type: ignore[no-untyped-def]
-    _fuzzy_jt_pd(  # pragma: no cover - compiled
-        t,
-        carray(y, ny),
-        carray(r, nr),
-        carray(p, n_p),
-        carray(s, ns),
-        carray(tau, nt),
-    )
+fuzzy_jt_pd_cfunc = wrap_control_function(_fuzzy_jt_pd, cache=True)
 
 
 def tip_deflections(arm: Plant) -> F64:
@@ -172,8 +164,6 @@ class FuzzyAdaptiveJTPD(Controller):
         cls, arm: Plant, zeta: float = 0.707, *, ks: float = 1.0, law: str = "scaled"
     ) -> FuzzyAdaptiveJTPD:
         """The paper's gains (as :meth:`JacobianTransposePD.from_arm`) with adaptation."""
-        from .controllers import JacobianTransposePD
-
         base = JacobianTransposePD.from_arm(arm, zeta)
         return cls(kp=base.kp, kd=base.kd, ks=ks, law=law)
 
@@ -227,8 +217,8 @@ class FuzzyAdaptiveJTPD(Controller):
 
     def parameters_for(self, arm: Plant, sensor: Sensor | None) -> F64:
         owner = "FuzzyAdaptiveJTPD"
-        kp = _gain_matrix(self.kp, "kp", owner)
-        kd = _gain_matrix(self.kd, "kd", owner)
+        kp = gain_matrix(self.kp, "kp", owner)
+        kd = gain_matrix(self.kd, "kd", owner)
         compiled = self._checked_system(arm)
         lengths = operational_lengths(arm, sensor)
         tips = tip_deflections(arm)

@@ -32,6 +32,7 @@ it in :class:`CompiledController`.
 from __future__ import annotations
 
 import math
+import types as pytypes
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -47,6 +48,7 @@ from ..errors import InvalidTypeError, InvalidValueError
 from ..model.kinematics import lever_lengths
 from ..model.plant import Plant
 from ..sensing.sensors import Sensor
+from ._gains import gain_matrix, gain_vector
 from .signals import (
     r_angles,
     r_position,
@@ -79,21 +81,55 @@ CONTROL_SIGNATURE = types.void(
 """``void(t, y*, ny, r*, nr, params*, np, state*, ns, tau*, ntau)``"""
 
 
+def _call_law(t, y, ny, r, nr, p, n_p, s, ns, tau, nt):  # type: ignore[no-untyped-def]
+    """The body of every compiled callback: the law ``law`` (a global of the copy that
+    :func:`wrap_control_function` makes) called on array views of the C pointers."""
+    law(t, carray(y, ny), carray(r, nr), carray(p, n_p), carray(s, ns), carray(tau, nt))  # type: ignore[name-defined]  # noqa: F821
+
+
 def wrap_control_function(fn: Callable[..., None], cache: bool = False) -> CFunc:
     """Turn ``fn(t, y, r, params, state, tau)`` (a ``numba.njit`` function of
-    arrays) into a ``numba.cfunc`` with :data:`CONTROL_SIGNATURE`."""
+    arrays) into a ``numba.cfunc`` with :data:`CONTROL_SIGNATURE`.
 
-    def wrapper(t, y, ny, r, nr, p, n_p, s, ns, tau, nt):  # type: ignore[no-untyped-def]
-        fn(
-            t,
-            carray(y, ny),
-            carray(r, nr),
-            carray(p, n_p),
-            carray(s, ns),
-            carray(tau, nt),
+    Parameters
+    ----------
+    fn : numba dispatcher
+        The law, compiled with ``@numba.njit``.
+    cache : bool
+        Cache the compiled callback on disk (``numba.cfunc(cache=True)``), beside
+        ``fn``'s own cache.
+
+    Returns
+    -------
+    numba.core.ccallback.CFunc
+        The callback, whose ``address`` the simulator's loop calls: it makes array
+        views of the pointers it gets and calls ``fn`` (compiled into it), no more.
+
+    Notes
+    -----
+    The callback is a copy of one function body with ``fn`` among its globals, not a
+    closure: Numba keys a cached function by its code and the values it closes over,
+    and a closure over a dispatcher hashes differently in every process (the cache
+    would never be read). The copy takes ``fn``'s module, file, line and name with
+    ``_cfunc`` appended, so its cache entry sits beside ``fn``'s and is refreshed when
+    ``fn``'s source file changes, as for a callback written out by hand.
+    """
+    py_func = getattr(fn, "py_func", None)
+    if py_func is None:
+        raise InvalidTypeError(
+            "The 'fn' parameter of wrap_control_function must be a numba.njit function. "
+            f"Got {type(fn).__name__} instead."
         )
-
-    return nb.cfunc(CONTROL_SIGNATURE, cache=cache)(wrapper)
+    name = f"{py_func.__name__}_cfunc"
+    code = _call_law.__code__.replace(
+        co_name=name,
+        co_qualname=f"{py_func.__qualname__}_cfunc",
+        co_filename=py_func.__code__.co_filename,
+        co_firstlineno=py_func.__code__.co_firstlineno,
+    )
+    scope = {"__name__": py_func.__module__, "law": fn, "carray": carray}
+    callback = pytypes.FunctionType(code, scope, name)
+    return nb.cfunc(CONTROL_SIGNATURE, cache=cache)(callback)
 
 
 # ------------------------------------------------------------------ built-ins
@@ -141,28 +177,8 @@ def _jacobian_transpose_pd(
     jacobian_transpose_law(y, r, p, 1.0, 1.0, tau)
 
 
-@nb.cfunc(CONTROL_SIGNATURE, cache=True)
-def joint_pd_cfunc(t, y, ny, r, nr, p, n_p, s, ns, tau, nt):  # type: ignore[no-untyped-def]
-    _joint_pd(  # pragma: no cover - compiled
-        t,
-        carray(y, ny),
-        carray(r, nr),
-        carray(p, n_p),
-        carray(s, ns),
-        carray(tau, nt),
-    )
-
-
-@nb.cfunc(CONTROL_SIGNATURE, cache=True)
-def jacobian_transpose_pd_cfunc(t, y, ny, r, nr, p, n_p, s, ns, tau, nt):  # type: ignore[no-untyped-def]
-    _jacobian_transpose_pd(  # pragma: no cover - compiled
-        t,
-        carray(y, ny),
-        carray(r, nr),
-        carray(p, n_p),
-        carray(s, ns),
-        carray(tau, nt),
-    )
+joint_pd_cfunc = wrap_control_function(_joint_pd, cache=True)
+jacobian_transpose_pd_cfunc = wrap_control_function(_jacobian_transpose_pd, cache=True)
 
 
 # ------------------------------------------------------------------ classes
@@ -170,7 +186,8 @@ class Controller:
     """Interface: what the simulator needs from a controller.
 
     Subclasses provide :attr:`cfunc` (a ``numba.cfunc`` with
-    :data:`CONTROL_SIGNATURE`), :meth:`parameters` (the ``params`` vector for a
+    :data:`CONTROL_SIGNATURE`, made from the law by :func:`wrap_control_function`),
+    :meth:`parameters` (the ``params`` vector for a
     given arm) and :meth:`initial_state` (the initial ``state`` vector).
     """
 
@@ -260,41 +277,6 @@ def _ptr(a: NDArray[np.float64]) -> object:
     return a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
 
 
-def _gain_vector(value: ArrayLike, name: str, owner: str, n: int) -> NDArray[np.float64]:
-    g = check_array(value, name, owner, real=True)
-    if g.ndim == 0:
-        g = np.full(n, float(g))
-    if g.shape != (n,):
-        raise InvalidValueError(
-            f"The '{name}' parameter of {owner} must be a scalar or of shape ({n},). "
-            f"Got shape {g.shape} instead."
-        )
-    if np.any(g < 0):
-        raise InvalidValueError(f"The '{name}' parameter of {owner} must be >= 0. Got {g} instead.")
-    return g
-
-
-def _gain_matrix(value: ArrayLike, name: str, owner: str) -> NDArray[np.float64]:
-    g = check_array(value, name, owner, real=True)
-    if g.ndim == 0:
-        g = float(g) * np.eye(2)
-    elif g.shape == (2,):
-        g = np.diag(g)
-    if g.shape != (2, 2):
-        raise InvalidValueError(
-            f"The '{name}' parameter of {owner} must be a scalar, of shape (2,) or (2, 2). "
-            f"Got shape {g.shape} instead."
-        )
-    lowest = float(np.linalg.eigvalsh(0.5 * g + 0.5 * g.T).min())  # no overflow near 1e308
-    if lowest < 0.0:
-        raise InvalidValueError(
-            f"The '{name}' parameter of {owner} must be positive semidefinite (a gain that "
-            f"pushes away from the reference is not a PD law). Got {value!r}, whose "
-            f"symmetric part has the eigenvalue {lowest:.6g}, instead."
-        )
-    return g
-
-
 def operational_lengths(arm: Plant, sensor: Sensor | None = None) -> NDArray[np.float64]:
     """Lever lengths of the rigid Jacobian of the point an operational-space law controls.
 
@@ -333,8 +315,8 @@ class JointPD(Controller):
 
     def parameters(self, arm: Plant) -> NDArray[np.float64]:
         n = arm.n_links
-        kp = _gain_vector(self.kp, "kp", "JointPD", n)
-        kd = _gain_vector(self.kd, "kd", "JointPD", n)
+        kp = gain_vector(self.kp, "kp", "JointPD", n)
+        kd = gain_vector(self.kd, "kd", "JointPD", n)
         return np.concatenate([kp, kd])
 
 
@@ -358,7 +340,7 @@ class JacobianTransposePD(Controller):
 
     def __post_init__(self) -> None:
         for gain in ("kp", "kd"):  # checked now, not at the first run
-            _gain_matrix(getattr(self, gain), gain, type(self).__name__)
+            gain_matrix(getattr(self, gain), gain, type(self).__name__)
 
     @classmethod
     def from_arm(cls, arm: Plant, zeta: float = 0.707) -> JacobianTransposePD:
@@ -381,8 +363,8 @@ class JacobianTransposePD(Controller):
         return self.parameters_for(arm, None)
 
     def parameters_for(self, arm: Plant, sensor: Sensor | None) -> NDArray[np.float64]:
-        kp = _gain_matrix(self.kp, "kp", "JacobianTransposePD")
-        kd = _gain_matrix(self.kd, "kd", "JacobianTransposePD")
+        kp = gain_matrix(self.kp, "kp", "JacobianTransposePD")
+        kd = gain_matrix(self.kd, "kd", "JacobianTransposePD")
         return np.concatenate([kp.ravel(), kd.ravel(), operational_lengths(arm, sensor)])
 
 

@@ -104,6 +104,20 @@ def check_detectable(sys: StateSpace, owner: str, what: str = "sensor") -> None:
             )
 
 
+def _riccati(sys: StateSpace, a: F64, b: F64, q: F64, r: F64, failure: str) -> F64:
+    """The stabilising solution of the algebraic Riccati equation of ``sys``'s kind
+    (continuous or discrete) for ``(a, b, q, r)``; ``failure`` begins the message
+    when there is none."""
+    import scipy.linalg
+
+    solve = scipy.linalg.solve_continuous_are if sys.dt is None else scipy.linalg.solve_discrete_are
+    try:
+        x: F64 = solve(a, b, q, r)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise InvalidValueError(f"{failure}: {exc}") from exc
+    return x
+
+
 def lqr(sys: StateSpace, Q: ArrayLike, R: ArrayLike) -> Regulator:
     """The linear-quadratic regulator of ``sys`` (continuous or sampled).
 
@@ -115,24 +129,16 @@ def lqr(sys: StateSpace, Q: ArrayLike, R: ArrayLike) -> Regulator:
     R : array_like, shape (m, m), (m,) or scalar
         Input weight (positive definite).
     """
-    import scipy.linalg
-
     owner = "lqr"
     q = _weight(Q, "Q", owner, sys.n_states, definite=False)
     r = _weight(R, "R", owner, sys.n_inputs, definite=True)
     a, b = sys.A, sys.B
-    try:
-        if sys.dt is None:
-            s = scipy.linalg.solve_continuous_are(a, b, q, r)
-            k = np.linalg.solve(r, b.T @ s)
-        else:
-            s = scipy.linalg.solve_discrete_are(a, b, q, r)
-            k = np.linalg.solve(r + b.T @ s @ b, b.T @ s @ a)
-    except (np.linalg.LinAlgError, ValueError) as exc:
-        raise InvalidValueError(
-            f"The 'Q' parameter of {owner} gives no stabilising solution with this model "
-            f"(is (A, B) stabilisable and (A, Q) detectable?): {exc}"
-        ) from exc
+    failure = f"The 'Q' parameter of {owner} gives no stabilising solution with this model"
+    s = _riccati(sys, a, b, q, r, f"{failure} (is (A, B) stabilisable and (A, Q) detectable?)")
+    if sys.dt is None:
+        k: F64 = np.asarray(np.linalg.solve(r, b.T @ s), dtype=np.float64)
+    else:
+        k = np.asarray(np.linalg.solve(r + b.T @ s @ b, b.T @ s @ a), dtype=np.float64)
     poles = np.asarray(np.linalg.eigvals(a - b @ k), dtype=np.complex128)
     return Regulator(K=k, S=s, poles=poles)
 
@@ -150,8 +156,6 @@ def kalman(sys: StateSpace, G: ArrayLike, Qn: ArrayLike, Rn: ArrayLike) -> Estim
     Rn : array_like, shape (p, p), (p,) or scalar
         Measurement-noise covariance (positive definite).
     """
-    import scipy.linalg
-
     owner = "kalman"
     g = check_array(G, "G", owner, shape=(sys.n_states, -1))
     qn = _weight(Qn, "Qn", owner, g.shape[1], definite=False)
@@ -160,19 +164,13 @@ def kalman(sys: StateSpace, G: ArrayLike, Qn: ArrayLike, Rn: ArrayLike) -> Estim
     a, c = sys.A, sys.C
     gqg = g @ qn @ g.T
     gqg = 0.5 * (gqg + gqg.T)
-    try:
-        if sys.dt is None:
-            p = scipy.linalg.solve_continuous_are(a.T, c.T, gqg, rn)
-            gain = np.linalg.solve(rn, c @ p).T
-            m = gain
-        else:
-            p = scipy.linalg.solve_discrete_are(a.T, c.T, gqg, rn)
-            m = np.linalg.solve(c @ p @ c.T + rn, c @ p).T
-            gain = a @ m
-    except (np.linalg.LinAlgError, ValueError) as exc:
-        raise InvalidValueError(
-            f"The 'Qn' parameter of {owner} gives no stabilising filter with this model "
-            f"(is (A, G) stabilisable?): {exc}"
-        ) from exc
+    failure = f"The 'Qn' parameter of {owner} gives no stabilising filter with this model"
+    p = _riccati(sys, a.T, c.T, gqg, rn, f"{failure} (is (A, G) stabilisable?)")
+    if sys.dt is None:
+        gain: F64 = np.asarray(np.linalg.solve(rn, c @ p).T, dtype=np.float64)
+        m = gain
+    else:
+        m = np.asarray(np.linalg.solve(c @ p @ c.T + rn, c @ p).T, dtype=np.float64)
+        gain = a @ m
     poles = np.asarray(np.linalg.eigvals(a - gain @ c), dtype=np.complex128)
     return Estimator(L=gain, M=m, P=p, poles=poles)

@@ -149,10 +149,7 @@ def closed_loop_matrix(
     step = check_real(step, "step", _OWNER, positive=True)
     n, n_links = arm.n_dof, arm.n_links
     theta = np.asarray(arm.inverse_kinematics(target, elbow=elbow), dtype=float)
-    q0 = np.zeros(n)
-    q0[:n_links] = theta
-    if arm.has_flexible_joints:
-        q0[arm.motor_slice] = theta
+    q0 = rest_state(arm, theta)
     link, distance, _ = sensor.resolve(arm)
     r = np.zeros(reference_size(n_links))
     short_of_tip = link >= 0 and not (

@@ -43,18 +43,34 @@ from typing import NamedTuple
 
 import numba as nb
 import numpy as np
-from numba import carray  # type: ignore[attr-defined]
 from numba.core.ccallback import CFunc
 from numpy.typing import NDArray
 
 from .._validation import check_int, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..fuzzy import FuzzySystem, paper_system, workspace_size
-from ..fuzzy.compiled import _evaluate_into, _unpack_system, pack_system
+from ..fuzzy._kernels import evaluate_into_kernel, unpack_system_kernel
+from ..fuzzy.compiled import pack_system
 from ..model.arm import FlexibleArm
 from ..model.plant import Plant
 from ..sensing.sensors import JointSensor, PointSensor, Sensor, TipSensor
-from .controllers import CONTROL_SIGNATURE, Controller
+from ._lqg_layout import (
+    FUZZY,
+    GAIN,
+    HEAD,
+    KS,
+    LAMBDA0,
+    N_GRID,
+    NX,
+    NY,
+    POINT,
+    LQGLayout,
+    block_parts,
+    pack_block,
+    pack_parameters,
+    state_parts,
+)
+from .controllers import Controller, wrap_control_function
 from .design import kalman, lqr
 from .linearize import linearize
 from .signals import (
@@ -71,7 +87,6 @@ from .signals import (
 __all__ = ["LQG", "closed_loop_growth", "lqg_law"]
 
 F64 = NDArray[np.float64]
-_HEAD = 8  # nx, ny, grid size, point sensor flag, gain, ks, lambda0, fuzzy offset
 _OWNER = "LQG"
 
 
@@ -82,14 +97,15 @@ def _lerp(p: F64, o0: int, o1: int, w: float, k: int) -> float:  # pragma: no co
 
 @nb.njit(cache=True, nogil=True)
 def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # pragma: no cover
-    """The LQG step (module docstring); parameter and state layout in :class:`LQG`."""
+    """The LQG step (module docstring); the parameter and state layout in :class:`LQG`'s
+    Notes."""
     nu = tau.shape[0]
-    nx, ny, ng = int(p[0]), int(p[1]), int(p[2])
-    point = p[3] != 0.0
-    gain, ks, lam0, fo = p[4], p[5], p[6], int(p[7])
-    grid = p[_HEAD : _HEAD + ng]
-    blk = nx * nx + nx * nu + ny * nx + nu * nx + nx * ny
-    base = _HEAD + ng
+    nx, ny, ng = int(p[NX]), int(p[NY]), int(p[N_GRID])
+    point = p[POINT] != 0.0
+    gain, ks, lam0, fo = p[GAIN], p[KS], p[LAMBDA0], int(p[FUZZY])
+    grid = p[HEAD : HEAD + ng]
+    f_phi, f_gam, f_c, f_k, f_m, blk = block_parts(nx, nu, ny)
+    base = HEAD + ng
     # --- the schedule: interpolate between the grid points around theta_2
     ra = r_angles(nu)
     th1, th2 = r[ra], r[ra + 1]
@@ -102,12 +118,11 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
         w = min(max(w, 0.0), 1.0)
     o0 = base + j * blk
     o1 = base + min(j + 1, ng - 1) * blk
-    f_phi, f_gam = 0, nx * nx
-    f_c, f_k, f_m = f_gam + nx * nu, f_gam + nx * nu + ny * nx, f_gam + nx * nu + ny * nx + nu * nx
-    xh = s[0:nx]
-    du = s[nx : nx + nu]
-    xp = s[nx + nu : 2 * nx + nu]
-    innov = s[2 * nx + nu : 2 * nx + nu + ny]
+    s_du, s_xp, s_innov, s_fuzzy, s_gain, s_work = state_parts(nx, nu, ny)
+    xh = s[0:s_du]
+    du = s[s_du : s_du + nu]
+    xp = s[s_xp : s_xp + nx]
+    innov = s[s_innov : s_innov + ny]
     # --- prediction: xp = Phi xh + Gamma du
     for a in range(nx):
         acc = 0.0
@@ -144,15 +159,15 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
         xh[a] = acc
     if ks > 0.0:  # fuzzy adaptation: the paper's system reads the estimated deflections
         nd = nx // 2
-        x_in = s[2 * nx + nu + ny : 2 * nx + 2 * nu + ny]
+        x_in = s[s_fuzzy : s_fuzzy + nu]
         for i in range(nu):
             acc = 0.0
             for q in range(nd):
                 acc += p[fo + i * nd + q] * xh[q]
             x_in[i] = ks * acc
-        system = _unpack_system(p, fo + nu * nd)
-        gain = gain * _evaluate_into(system, x_in, s[2 * nx + 2 * nu + ny + 1 :]) / lam0
-        s[2 * nx + 2 * nu + ny] = gain  # the last gain, for the record
+        system = unpack_system_kernel(p, fo + nu * nd)
+        gain = gain * evaluate_into_kernel(system, x_in, s[s_work:]) / lam0
+        s[s_gain] = gain  # the last gain, for the record
     for a in range(nu):
         acc = 0.0
         for b in range(nx):
@@ -161,11 +176,7 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
         tau[a] = gain * acc
 
 
-@nb.cfunc(CONTROL_SIGNATURE, cache=True)
-def lqg_cfunc(t, y, ny, r, nr, p, n_p, s, ns, tau, nt):  # type: ignore[no-untyped-def]
-    lqg_law(  # pragma: no cover - compiled
-        t, carray(y, ny), carray(r, nr), carray(p, n_p), carray(s, ns), carray(tau, nt)
-    )
+lqg_cfunc = wrap_control_function(lqg_law, cache=True)
 
 
 @dataclass(frozen=True)
@@ -207,10 +218,15 @@ class LQG(Controller):
 
     Notes
     -----
-    Parameter vector: ``nx, ny, G, point`` then the grid (``G``) then, per grid
-    point, ``Phi`` (nx, nx), ``Gamma`` (nx, nu), ``C`` (ny, nx), ``K`` (nu, nx),
-    ``M`` (nx, ny) row-major. State: the estimate (nx), the last ``du`` (nu) and
-    scratch (nx + ny).
+    The parameter vector: a header (``nx, ny``, the grid's size ``G``, the
+    point-sensor flag, ``gain``, ``ks``, ``lambda0`` and the offset of the fuzzy
+    part), the grid of elbow angles (``G``, rad), one block per grid point of
+    ``Phi`` (nx, nx), ``Gamma`` (nx, nu), ``C`` (ny, nx), ``K`` (nu, nx) and
+    ``M`` (nx, ny) row-major, then with ``ks > 0`` the links' tip-deflection rows
+    (nu, nx / 2) and the packed fuzzy system. The state: the estimate (nx), the
+    last ``du`` (nu), the prediction (nx) and the innovation (ny); with ``ks > 0``
+    the fuzzy inputs (nu), the last gain and the fuzzy workspace. Both layouts
+    are defined once, in the internal module ``flexarm.control._lqg_layout``.
     """
 
     model: FlexibleArm | None = None
@@ -278,10 +294,11 @@ class LQG(Controller):
         model = self._model(arm)
         nx, nu = 2 * model.n_dof, model.n_links
         ny = 4  # the largest measurement: a point's position and velocity, or 2 x 2 encoders
-        fuzzy = nu + 1 + int(workspace_size(self._fuzzy().compiled())) if self.ks > 0 else 0
-        state = np.zeros(nx + nu + nx + ny + fuzzy)
-        if self.ks > 0:
-            state[2 * nx + 2 * nu + ny] = self.gain
+        _, _, _, fuzzy_inputs, gain, workspace = state_parts.py_func(nx, nu, ny)
+        if self.ks <= 0:
+            return np.zeros(fuzzy_inputs)
+        state = np.zeros(workspace + int(workspace_size(self._fuzzy().compiled())))
+        state[gain] = self.gain
         return state
 
     def _fuzzy(self) -> FuzzySystem:
@@ -340,10 +357,8 @@ class LQG(Controller):
             for i in range(n_links):
                 tips[i, ms[i] : ms[i + 1]] = model.arrays.tip_deflection[ms[i] : ms[i + 1]]
             fuzzy = [tips.ravel(), pack_system(fls.compiled())]
-        point_flag = 1.0 if point else 0.0
-        head = np.array([nx, ny, grid.shape[0], point_flag, self.gain, self.ks, lam0, 0.0])
-        head[7] = head.shape[0] + grid.shape[0] + sum(b.shape[0] for b in blocks)  # fuzzy part
-        return np.concatenate([head, grid, *blocks, *fuzzy])
+        head = (nx, ny, grid.shape[0], 1.0 if point else 0.0, self.gain, self.ks, lam0)
+        return pack_parameters(head, grid, blocks, fuzzy)
 
 
 _MEASUREMENT_FLOOR = 1e-2
@@ -394,8 +409,7 @@ def _design_blocks(
         reg = lqr(meas, q, rt * np.eye(n_links))
         rn = np.diag([pos_noise**2] * half + [vel_noise**2] * half)
         est = kalman(meas, meas.B, tn**2 * np.eye(n_links), rn)
-        parts = [meas.A, meas.B, meas.C, reg.K, est.M]
-        blocks.append(np.concatenate([a.ravel() for a in parts]))
+        blocks.append(pack_block(meas.A, meas.B, meas.C, reg.K, est.M))
     for b in blocks:
         b.flags.writeable = False
     return blocks, ny
@@ -420,20 +434,13 @@ def closed_loop_growth(
     reference = np.zeros((len(theta2), 6 + 4 * model.n_links))
     reference[:, r_angles(model.n_links) + 1] = theta2
     params = law.design(model, sensor, dt, reference)
-    nx, ny, ng = int(params[0]), int(params[1]), int(params[2])
-    grid = params[_HEAD : _HEAD + ng]
-    nu = model.n_links
-    blk = nx * nx + nx * nu + ny * nx + nu * nx + nx * ny
+    layout = LQGLayout.of(params, model.n_links)
+    nx = layout.nx
+    grid = layout.grid(params)
     worst = -np.inf
     for th in theta2:
         j = int(np.argmin(np.abs(grid - th)))
-        block = params[_HEAD + ng + j * blk : _HEAD + ng + (j + 1) * blk]
-        sizes = [(nx, nx), (nx, nu), (ny, nx), (nu, nx), (nx, ny)]
-        mats, o = [], 0
-        for a, b in sizes:
-            mats.append(block[o : o + a * b].reshape(a, b))
-            o += a * b
-        phi, gam, c, k, m = mats
+        phi, gam, c, k, m = layout.matrices(params, j)
         p = linearize(plant, np.array([0.0, grid[j]]), sensor=sensor, rates=True).discretize(dt)
         n_p = p.n_states
         eye = np.eye(nx)

@@ -24,7 +24,6 @@ from dataclasses import dataclass
 
 import numba as nb
 import numpy as np
-from numba import carray  # type: ignore[attr-defined]
 from numba.core.ccallback import CFunc
 from numpy.typing import ArrayLike, NDArray
 
@@ -34,10 +33,10 @@ from ..model.arm import FlexibleArm
 from ..model.plant import Plant
 from ..sensing.sensors import Sensor
 from .controllers import (
-    CONTROL_SIGNATURE,
     Controller,
     JacobianTransposePD,
     jacobian_transpose_law,
+    wrap_control_function,
 )
 from .linearize import closed_loop_matrix
 from .signals import y_angles, y_point, y_point_rate, y_rates
@@ -74,11 +73,7 @@ def _reflected(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # p
     jacobian_transpose_law(s, r, p, 1.0, 1.0, tau)
 
 
-@nb.cfunc(CONTROL_SIGNATURE, cache=True)
-def reflected_cfunc(t, y, ny, r, nr, p, n_p, s, ns, tau, nt):  # type: ignore[no-untyped-def]
-    _reflected(  # pragma: no cover - compiled
-        t, carray(y, ny), carray(r, nr), carray(p, n_p), carray(s, ns), carray(tau, nt)
-    )
+reflected_cfunc = wrap_control_function(_reflected, cache=True)
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ from ..model.arm import FlexibleArm
 from ..sensing.delays import discretize
 from ..sensing.sensors import Sensor
 from .controllers import Controller
-from .linearize import linearize, measure
+from .linearize import linearize, measure, rest_state
 
 __all__ = ["LinearLoop", "SamplingCheck", "check_sampling", "linear_loop"]
 
@@ -215,10 +215,7 @@ def linear_loop(
     state and a reference vector."""
     n = arm.n_dof
     plant = linearize(arm, theta)
-    q0 = np.zeros(n)
-    q0[: arm.n_links] = theta
-    if arm.has_flexible_joints:
-        q0[arm.motor_slice] = theta
+    q0 = rest_state(arm, theta)
     h = 1e-7  # central differences: the state at rest, then +h and -h along each coordinate
     steps = np.concatenate([np.zeros((1, 2 * n)), h * np.eye(2 * n), -h * np.eye(2 * n)])
     ys = measure(arm, sensor, q0 + steps[:, :n], steps[:, n:], 1e-5)

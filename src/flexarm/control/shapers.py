@@ -4,7 +4,7 @@ A shaper is a sequence of impulses of amplitudes ``A_i`` (summing to one, so a
 shaped step still reaches the set point) at times ``t_i`` (``t_0 = 0``). The
 shaped reference is ``sum_i A_i r(t - t_i)``; it reaches the set point
 ``t_{k-1}`` (the shaper's :attr:`~Shaper.duration`) later than ``r``. The paper
-(spec §4) names ZV/ZVD-type shapers on the reference as a residual-vibration
+(its Sec. V) names ZV/ZVD-type shapers on the reference as a residual-vibration
 remedy.
 
 Residual vibration
@@ -69,6 +69,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
+from ._ei import ei_unit
 
 __all__ = [
     "KINDS",
@@ -85,8 +86,6 @@ KINDS = ("zv", "zvd", "ei")
 
 _SUM_TOL = 1e-9  # allowed |sum(A) - 1|
 _MERGE_RTOL = 1e-12  # impulse times closer than this fraction of the duration are merged
-_EI_DAMPING_STEP = 0.02  # continuation step of the damped EI solve
-_EI_RESIDUAL_TOL = 1e-10
 
 
 def _frozen(a: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -408,10 +407,9 @@ def zvd(frequency: float, damping: float = 0.0) -> Shaper:
 
     Parameters
     ----------
-    frequency : float
-        Undamped natural frequency ``w`` of the mode, rad/s (> 0).
-    damping : float
-        Damping ratio ``zeta``, in [0, 1).
+    frequency, damping : float
+        The mode, as for :func:`zv`: its undamped natural frequency ``w`` in rad/s
+        (> 0) and its damping ratio ``zeta`` in [0, 1).
 
     Returns
     -------
@@ -458,72 +456,8 @@ def ei(frequency: float, damping: float = 0.0, tolerance: float = 0.05) -> Shape
     if z == 0.0:
         amps = np.array([(1.0 + v) / 4.0, (1.0 - v) / 2.0, (1.0 + v) / 4.0])
         return Shaper(amps, np.array([0.0, 0.5 * period, period]))
-    amps, unit_times = _ei_unit(z, v)
+    amps, unit_times = ei_unit(z, v)
     return Shaper(amps / amps.sum(), unit_times / w)
-
-
-def _ei_equations(x: NDArray[np.float64], z: float, v: float) -> NDArray[np.float64]:
-    """EI constraints at ``w0 = 1`` for ``x = (A0, A1, A2, t1, t2, w_lo, w_hi)``."""
-    amps = x[:3]
-    c = complex(z, math.sqrt(1.0 - z * z))
-    tau = np.array([-x[4], x[3] - x[4], 0.0])
-    e0 = amps * np.exp(c * tau)
-    w0 = e0.sum()
-    dw0 = (c * tau * e0).sum()
-    lo = (amps * np.exp(x[5] * c * tau)).sum()
-    hi = (amps * np.exp(x[6] * c * tau)).sum()
-    return np.array(
-        [
-            amps.sum() - 1.0,
-            abs(w0) - v,
-            (w0.conjugate() * dw0).real,  # d|W|**2/dw / 2 = 0: a hump at w0
-            lo.real,
-            lo.imag,
-            hi.real,
-            hi.imag,
-        ]
-    )
-
-
-def _ei_unit(z: float, v: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Damped EI amplitudes and times (s at ``w0 = 1 rad/s``), by continuation in ``z``."""
-    from scipy.optimize import root  # loaded on first use
-
-    xz = math.acos(-(1.0 - v) / (1.0 + v))  # zeros of the undamped closed form
-    x = np.array(
-        [
-            (1 + v) / 4,
-            (1 - v) / 2,
-            (1 + v) / 4,
-            math.pi,
-            2 * math.pi,
-            xz / math.pi,
-            2 - xz / math.pi,
-        ]
-    )
-    steps = max(1, math.ceil(z / _EI_DAMPING_STEP))
-    for zk in np.linspace(0.0, z, steps + 1)[1:]:
-        with np.errstate(all="ignore"):
-            sol = root(
-                _ei_equations, x, args=(float(zk), v), method="hybr", options={"xtol": 1e-13}
-            )
-            resid = np.max(np.abs(_ei_equations(sol.x, float(zk), v)))
-        xn = sol.x
-        ok = (
-            np.isfinite(resid)
-            and resid < _EI_RESIDUAL_TOL
-            and np.all(xn[:3] > 0.0)
-            and 0.0 < xn[3] < xn[4]
-            and 0.0 < xn[5] < 1.0 < xn[6]
-        )
-        if not ok:
-            raise InvalidValueError(
-                f"The 'damping' parameter of ei must be small enough for the EI constraints "
-                f"(tolerance={v!r}) to have a solution; none was found beyond damping "
-                f"{float(zk):.3g}. Got {z!r} instead (use zvd for heavily damped modes)."
-            )
-        x = xn
-    return _frozen(x[:3]), _frozen(np.array([0.0, x[3], x[4]]))
 
 
 _DESIGNERS: dict[str, Callable[..., Shaper]] = {"zv": zv, "zvd": zvd, "ei": ei}

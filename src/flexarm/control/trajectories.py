@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_int, check_option, check_real, validate_real_fields
 from ..errors import InvalidTypeError, InvalidValueError
+from ._piecewise import COMPILED_FROM, piecewise_numpy
 
 __all__ = [
     "Circle",
@@ -116,7 +117,7 @@ def _piecewise(t: _F, knot_t: _F, knot_p: _F, quintic: bool) -> _Triple:
     (:func:`flexarm.control._path_kernels.piecewise_path`), short ones stay in
     NumPy (no compilation or cache loading for a few points).
     """
-    if t.shape[0] >= _COMPILED_FROM:
+    if t.shape[0] >= COMPILED_FROM:
         from ._path_kernels import piecewise_path
 
         out = np.empty((3, t.shape[0], 2))
@@ -130,40 +131,39 @@ def _piecewise(t: _F, knot_t: _F, knot_p: _F, quintic: bool) -> _Triple:
             out[2],
         )
         return out[0], out[1], out[2]
-    return _piecewise_numpy(t, knot_t, knot_p, quintic)
-
-
-_COMPILED_FROM = 4096
-"""Time grids at least this long are evaluated by the compiled kernel."""
-
-
-def _piecewise_numpy(t: _F, knot_t: _F, knot_p: _F, quintic: bool) -> _Triple:
-    """The NumPy evaluation of :func:`_piecewise` (the compiled kernel's reference)."""
-    k = knot_t.shape[0]
-    i = np.clip(np.searchsorted(knot_t, t, side="right") - 1, 0, k - 2)
-    t0 = knot_t[i]
-    span = knot_t[i + 1] - t0
-    tau = np.clip((t - t0) / span, 0.0, 1.0)
-    moving = ((t >= knot_t[0]) & (t < knot_t[-1]))[:, None]
-    delta = knot_p[i + 1] - knot_p[i]
-    if quintic:
-        s = tau**3 * (10.0 + tau * (-15.0 + 6.0 * tau))
-        ds = 30.0 * tau**2 * (1.0 - tau) ** 2
-        dds = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau)
-    else:
-        s = tau
-        ds = np.ones_like(tau)
-        dds = np.zeros_like(tau)
-    pos = knot_p[i] + s[:, None] * delta
-    vel = np.where(moving, (ds / span)[:, None] * delta, 0.0)
-    with np.errstate(over="ignore"):  # a side of ~1e154 s or more: no acceleration, as compiled
-        acc = np.where(moving, (dds / span**2)[:, None] * delta, 0.0)
-    return pos, vel, acc
+    return piecewise_numpy(t, knot_t, knot_p, quintic)
 
 
 # ------------------------------------------------------------------ paths
+class _StraightSegments:
+    """What the paths made of straight segments share: :meth:`evaluate` from their
+    knots (:meth:`_segments`, also what :func:`straight_segments` gives the loop)."""
+
+    def _segments(self) -> tuple[_F, _F, bool]:
+        """Knot times (k,) in s, knot points (k, 2) in m, and whether each segment
+        has quintic timing."""
+        raise NotImplementedError
+
+    def evaluate(self, t: ArrayLike) -> _Triple:
+        """Position, velocity and acceleration at ``t``.
+
+        Parameters
+        ----------
+        t : float or array_like, shape (m,)
+            Time, s.
+
+        Returns
+        -------
+        position, velocity, acceleration : ndarray, shape (m, 2) or (2,)
+            In m, m/s and m/s**2.
+        """
+        tt, scalar = evaluation_times(t, f"{type(self).__name__}.evaluate")
+        knot_t, knot_p, quintic = self._segments()
+        return _shape_out(_piecewise(tt, knot_t, knot_p, quintic), scalar)
+
+
 @dataclass(frozen=True)
-class Square:
+class Square(_StraightSegments):
     """A square traced side by side, the paper's tracking experiment.
 
     Corners are numbered 0..3 counter-clockwise from the lower-left one,
@@ -281,23 +281,6 @@ class Square:
         pts = np.concatenate([points[:1], np.repeat(points[1:], 2, axis=0)])
         return times, pts
 
-    def evaluate(self, t: ArrayLike) -> _Triple:
-        """Position, velocity and acceleration at ``t``.
-
-        Parameters
-        ----------
-        t : float or array_like, shape (m,)
-            Time, s.
-
-        Returns
-        -------
-        position, velocity, acceleration : ndarray, shape (m, 2) or (2,)
-            In m, m/s and m/s**2.
-        """
-        tt, scalar = evaluation_times(t, f"{type(self).__name__}.evaluate")
-        knot_t, knot_p, quintic = self._segments()
-        return _shape_out(_piecewise(tt, knot_t, knot_p, quintic), scalar)
-
     def _segments(self) -> tuple[_F, _F, bool]:
         knot_t, knot_p = self._knots()
         return knot_t, knot_p, self.timing == "quintic"
@@ -387,7 +370,7 @@ class Circle:
 
 
 @dataclass(frozen=True)
-class Line:
+class Line(_StraightSegments):
     """A straight line from ``start`` to ``end`` in ``duration``.
 
     Parameters
@@ -429,23 +412,6 @@ class Line:
         """Empty: a line has no corners."""
         return ()
 
-    def evaluate(self, t: ArrayLike) -> _Triple:
-        """Position, velocity and acceleration at ``t``.
-
-        Parameters
-        ----------
-        t : float or array_like, shape (m,)
-            Time, s.
-
-        Returns
-        -------
-        position, velocity, acceleration : ndarray, shape (m, 2) or (2,)
-            In m, m/s and m/s**2.
-        """
-        tt, scalar = evaluation_times(t, f"{type(self).__name__}.evaluate")
-        knot_t, knot_p, quintic = self._segments()
-        return _shape_out(_piecewise(tt, knot_t, knot_p, quintic), scalar)
-
     def _segments(self) -> tuple[_F, _F, bool]:
         return (
             np.array([0.0, self.duration]),
@@ -475,7 +441,7 @@ class PointToPoint(Line):
 
 
 @dataclass(frozen=True)
-class Waypoints:
+class Waypoints(_StraightSegments):
     """A path through ``points`` reached at ``times``.
 
     Parameters
@@ -548,23 +514,6 @@ class Waypoints:
     def corner_times(self) -> tuple[float, ...]:
         """The interior waypoint times ``times[1:-1]``, s."""
         return self.times[1:-1]
-
-    def evaluate(self, t: ArrayLike) -> _Triple:
-        """Position, velocity and acceleration at ``t``.
-
-        Parameters
-        ----------
-        t : float or array_like, shape (m,)
-            Time, s.
-
-        Returns
-        -------
-        position, velocity, acceleration : ndarray, shape (m, 2) or (2,)
-            In m, m/s and m/s**2.
-        """
-        tt, scalar = evaluation_times(t, f"{type(self).__name__}.evaluate")
-        knot_t, knot_p, quintic = self._segments()
-        return _shape_out(_piecewise(tt, knot_t, knot_p, quintic), scalar)
 
     def _segments(self) -> tuple[_F, _F, bool]:
         return np.array(self.times), np.array(self.points), self.interpolation == "quintic"

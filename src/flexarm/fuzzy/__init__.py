@@ -55,7 +55,7 @@ pure-NumPy path of :meth:`FuzzySystem.__call__` stays the reference.
 
 The paper's system
 ------------------
-:func:`paper_system` builds the adaptive law of the paper (spec §4): inputs
+:func:`paper_system` builds the adaptive law of the paper (its Sec. V.D): inputs
 ``delta1``, ``delta2`` (link deformations, m) on ``[-5, 5]`` with terms
 ``N = LeftShoulder(-5, 0)``, ``ZERO = Triangle(-5, 0, 5)``,
 ``P = RightShoulder(0, 5)``; output ``lambda`` on ``[0, 1]`` with

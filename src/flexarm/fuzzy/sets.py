@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -11,7 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_real
-from ..errors import InvalidTypeError
+from ..errors import InvalidTypeError, InvalidValueError
 
 __all__ = [
     "Gaussian",
@@ -34,8 +35,10 @@ FloatArray = NDArray[np.float64]
 # --------------------------------------------------------------------------- MFs
 
 
-def _order_error(name: str, owner: str, relation: str, got: float) -> ValueError:
-    return ValueError(f"The '{name}' parameter of {owner} must be {relation}. Got {got!r} instead.")
+def _order_error(name: str, owner: str, relation: str, got: float) -> InvalidValueError:
+    return InvalidValueError(
+        f"The '{name}' parameter of {owner} must be {relation}. Got {got!r} instead."
+    )
 
 
 def _trapezoid_values(a: float, b: float, c: float, d: float, x: FloatArray) -> FloatArray:
@@ -73,8 +76,29 @@ class MembershipFunction:
         """Finite abscissae where the function may have a kink or a jump."""
         return tuple(v for v in self.trapezoid() if math.isfinite(v))
 
-    def _packed(self) -> tuple[int, tuple[float, float, float, float]]:
+    def packed(self) -> tuple[int, tuple[float, float, float, float]]:
+        """The function as the compiled evaluation stores it: a kind code (0 a
+        trapezoid ``(a, b, c, d)``, 1 a Gaussian ``(mean, sigma, 0, 0)``) and four
+        parameters (:meth:`flexarm.fuzzy.system.FuzzySystem.compiled`)."""
         return _TRAPEZOID, self.trapezoid()
+
+    def _check_order(self, names: tuple[str, ...]) -> None:
+        """Store the fields ``names`` as floats; more than two must not decrease, and
+        the last must exceed the first (a support of positive width)."""
+        owner = type(self).__name__
+        for name in names:
+            object.__setattr__(self, name, check_real(getattr(self, name), name, owner))
+        if len(names) > 2:
+            for prev, name in itertools.pairwise(names):
+                if getattr(self, name) < getattr(self, prev):
+                    raise _order_error(
+                        name, owner, f">= {prev} = {getattr(self, prev)!r}", getattr(self, name)
+                    )
+        first, last = names[0], names[-1]
+        if not getattr(self, last) > getattr(self, first):
+            raise _order_error(
+                last, owner, f"> {first} = {getattr(self, first)!r}", getattr(self, last)
+            )
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,15 +114,7 @@ class Triangle(MembershipFunction):
     c: float
 
     def __post_init__(self) -> None:
-        owner = "Triangle"
-        for name in ("a", "b", "c"):
-            object.__setattr__(self, name, check_real(getattr(self, name), name, owner))
-        if self.b < self.a:
-            raise _order_error("b", owner, f">= a = {self.a!r}", self.b)
-        if self.c < self.b:
-            raise _order_error("c", owner, f">= b = {self.b!r}", self.c)
-        if not self.c > self.a:
-            raise _order_error("c", owner, f"> a = {self.a!r}", self.c)
+        self._check_order(("a", "b", "c"))
 
     def trapezoid(self) -> tuple[float, float, float, float]:
         return (self.a, self.b, self.b, self.c)
@@ -117,16 +133,7 @@ class Trapezoid(MembershipFunction):
     d: float
 
     def __post_init__(self) -> None:
-        owner = "Trapezoid"
-        for name in ("a", "b", "c", "d"):
-            object.__setattr__(self, name, check_real(getattr(self, name), name, owner))
-        for prev, name in (("a", "b"), ("b", "c"), ("c", "d")):
-            if getattr(self, name) < getattr(self, prev):
-                raise _order_error(
-                    name, owner, f">= {prev} = {getattr(self, prev)!r}", getattr(self, name)
-                )
-        if not self.d > self.a:
-            raise _order_error("d", owner, f"> a = {self.a!r}", self.d)
+        self._check_order(("a", "b", "c", "d"))
 
     def trapezoid(self) -> tuple[float, float, float, float]:
         return (self.a, self.b, self.c, self.d)
@@ -140,11 +147,7 @@ class LeftShoulder(MembershipFunction):
     c: float
 
     def __post_init__(self) -> None:
-        owner = "LeftShoulder"
-        for name in ("b", "c"):
-            object.__setattr__(self, name, check_real(getattr(self, name), name, owner))
-        if not self.c > self.b:
-            raise _order_error("c", owner, f"> b = {self.b!r}", self.c)
+        self._check_order(("b", "c"))
 
     def trapezoid(self) -> tuple[float, float, float, float]:
         return (-_INF, -_INF, self.b, self.c)
@@ -158,11 +161,7 @@ class RightShoulder(MembershipFunction):
     b: float
 
     def __post_init__(self) -> None:
-        owner = "RightShoulder"
-        for name in ("a", "b"):
-            object.__setattr__(self, name, check_real(getattr(self, name), name, owner))
-        if not self.b > self.a:
-            raise _order_error("b", owner, f"> a = {self.a!r}", self.b)
+        self._check_order(("a", "b"))
 
     def trapezoid(self) -> tuple[float, float, float, float]:
         return (self.a, self.b, _INF, _INF)
@@ -192,7 +191,7 @@ class Gaussian(MembershipFunction):
     def vertices(self) -> tuple[float, ...]:
         return (self.mean,)
 
-    def _packed(self) -> tuple[int, tuple[float, float, float, float]]:
+    def packed(self) -> tuple[int, tuple[float, float, float, float]]:
         return _GAUSSIAN, (self.mean, self.sigma, 0.0, 0.0)
 
 

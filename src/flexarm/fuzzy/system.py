@@ -223,20 +223,20 @@ class FuzzySystem:
     def _call_compiled(self, xs: list[FloatArray]) -> FloatArray:
         """The compiled kernel on the flattened inputs; large inputs in chunks on
         every core (the kernel releases the GIL)."""
-        from .compiled import _evaluate_many as evaluate_many  # the system built it: no checks
+        from ._kernels import evaluate_many_kernel  # the system built it: no checks
 
         x = np.ascontiguousarray(np.stack([a.ravel() for a in xs], axis=1), dtype=np.float64)
         system = self._packed
         n = x.shape[0]
         workers = min(_cores(), n // _CHUNK)
         if workers <= 1:
-            return evaluate_many(system, x)
+            return evaluate_many_kernel(system, x)
         from concurrent.futures import ThreadPoolExecutor
 
         out = np.empty(n)
 
         def run(k0: int) -> None:
-            out[k0 : k0 + _CHUNK] = evaluate_many(system, x[k0 : k0 + _CHUNK])
+            out[k0 : k0 + _CHUNK] = evaluate_many_kernel(system, x[k0 : k0 + _CHUNK])
 
         with ThreadPoolExecutor(max_workers=workers) as pool:
             list(pool.map(run, range(0, n, _CHUNK)))
@@ -371,7 +371,7 @@ class FuzzySystem:
         for j, var in enumerate(self.inputs):
             offsets.append(len(types))
             for mf in var.terms.values():
-                code, par = mf._packed()
+                code, par = mf.packed()
                 types.append(code)
                 pars.append(par)
                 owners.append(j)
