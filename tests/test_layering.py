@@ -60,7 +60,7 @@ WITHIN: dict[str, list[str]] = {
         "prescribed",
         "arm",
     ],
-    "sensing": ["delays", "sensors", "_channels", "channels"],
+    "sensing": ["delays", "sensors", "_channels", "channels", "instruments"],
     "control": [
         "options",
         "signals",
