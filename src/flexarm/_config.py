@@ -23,14 +23,32 @@ from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from typing import Any, NoReturn
 
-from .errors import ConfigError, ConfigFileError
+from .errors import ConfigError, ConfigFileError, KeyPathError
 
-__all__ = ["ConfigReader", "TomlValue", "read_toml"]
+__all__ = [
+    "KEY_PATTERN",
+    "ConfigReader",
+    "TomlValue",
+    "copy_value",
+    "format_key",
+    "read_toml",
+    "set_key",
+    "split_key",
+    "table_at",
+]
 
 TomlValue = str | int | float | bool | list["TomlValue"] | dict[str, "TomlValue"]
 """A value a TOML file can hold (dates and times excepted)."""
 
 _PARAMETER = re.compile(r"The '(\w+)' parameter")
+
+KEY_PATTERN = re.compile(
+    r"[A-Za-z_][A-Za-z0-9_]*(?:\[\d+\])*(?:\.[A-Za-z_][A-Za-z0-9_]*(?:\[\d+\])*)*"
+)
+"""A dotted key into a file's tables: names joined by dots, each with optional
+``[index]`` suffixes (``"arm.links[1].length"``)."""
+
+_PART = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]")
 
 
 def read_toml(
@@ -227,3 +245,75 @@ class ConfigReader:
             "must be a number, a string, a boolean, an array or a table. "
             f"Got {type(value).__name__} {value!r} instead.",
         )
+
+
+# ------------------------------------------------------------------ dotted keys
+def split_key(key: str) -> tuple[str | int, ...]:
+    """``"arm.links[1].length"`` -> ``("arm", "links", 1, "length")``.
+
+    Raises
+    ------
+    KeyPathError
+        If ``key`` is not a dotted key (:data:`KEY_PATTERN`).
+    """
+    if not isinstance(key, str) or not KEY_PATTERN.fullmatch(key):
+        raise KeyPathError(str(key), "not a dotted key ('sensor.noise_std', 'arm.links[1].length')")
+    return tuple(m[1] if m[1] is not None else int(m[2]) for m in _PART.finditer(key))
+
+
+def format_key(parts: tuple[str | int, ...]) -> str:
+    """The inverse of :func:`split_key`."""
+    text = ""
+    for p in parts:
+        text += f"[{p}]" if isinstance(p, int) else (f".{p}" if text else p)
+    return text
+
+
+def copy_value(value: TomlValue) -> TomlValue:
+    """A deep copy of a file's value (tables, arrays and scalars: what TOML and JSON
+    hold), without ``copy.deepcopy``'s bookkeeping."""
+    if isinstance(value, Mapping):
+        return {k: copy_value(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [copy_value(v) for v in value]
+    return value
+
+
+def table_at(
+    data: dict[str, TomlValue], parts: tuple[str | int, ...], key: str, *, create: bool = True
+) -> dict[str, TomlValue]:
+    """The table of ``data`` that holds the last part of ``parts`` (tables created on
+    the way where ``create``), for the dotted ``key`` the parts came from.
+
+    Raises
+    ------
+    KeyPathError
+        If the path indexes beyond an array, into something that is not an array or a
+        table, or (without ``create``) through a table that does not exist.
+    """
+    node: TomlValue = data
+    for k, part in enumerate(parts[:-1]):
+        where = format_key(parts[: k + 1])
+        if isinstance(part, int):
+            if not isinstance(node, list):
+                raise KeyPathError(key, f"'{where}' indexes something that is not an array")
+            if part >= len(node):
+                raise KeyPathError(key, f"the array has {len(node)} items: no '{where}'")
+            node = node[part]
+        else:
+            if not isinstance(node, dict):
+                raise KeyPathError(key, f"'{format_key(parts[:k])}' is not a table")
+            if not create and part not in node:
+                raise KeyPathError(key, f"there is no '{where}'")
+            node = node.setdefault(part, {})
+    if isinstance(parts[-1], int):
+        raise KeyPathError(key, "set an array item's keys ('arm.links[1].length'), not the item")
+    if not isinstance(node, dict):
+        raise KeyPathError(key, f"'{format_key(parts[:-1])}' is not a table")
+    return node
+
+
+def set_key(data: dict[str, TomlValue], key: str, value: TomlValue) -> None:
+    """Set the dotted ``key`` of ``data`` in place (tables created on the way)."""
+    parts = split_key(key)
+    table_at(data, parts, key)[str(parts[-1])] = copy_value(value)

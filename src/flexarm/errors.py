@@ -34,6 +34,7 @@ __all__ = [
     "FlexarmError",
     "InvalidTypeError",
     "InvalidValueError",
+    "KeyPathError",
     "OutputDirectoryError",
     "ScenarioError",
     "SweepError",
@@ -118,6 +119,15 @@ class ConfigError(ConfigFileError, InvalidValueError):
 
 class ConfigTypeError(ConfigFileError, InvalidTypeError):
     """An entry of the wrong type in a file."""
+
+
+class KeyPathError(InvalidValueError):
+    """A dotted key that cannot be set in a file's tables (``reason`` says why); the
+    readers report it as their file's error, naming the file."""
+
+    def __init__(self, key: str, reason: str):
+        self.key, self.reason = key, reason
+        super().__init__(f"{key}: {reason}")
 
 
 class ScenarioError(ConfigError):

@@ -24,9 +24,10 @@ from __future__ import annotations
 
 import hashlib
 import json
-import re
 from collections.abc import Callable, Iterator, Mapping
 
+from .._config import KEY_PATTERN, copy_value, format_key, split_key, table_at
+from ..errors import KeyPathError
 from ..sim.scenario_schema import JOINT_KINDS, SECTIONS, apply_overrides
 from .reader import Value
 
@@ -41,24 +42,10 @@ __all__ = [
     "with_changes",
 ]
 
-KEY_PATTERN = re.compile(
-    r"[A-Za-z_][A-Za-z0-9_]*(?:\[\d+\])*(?:\.[A-Za-z_][A-Za-z0-9_]*(?:\[\d+\])*)*"
-)
-"""A dotted key: names joined by dots, each with optional ``[index]`` suffixes."""
-
-_PART = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]")
 _NESTED_DEFAULT_KIND: dict[tuple[str, ...], str] = {("arm", "joints"): JOINT_KINDS[0]}
 _KEEP_ON_KIND_CHANGE: dict[tuple[str, ...], tuple[str, ...]] = {
     ("sensor",): ("noise_std", "rate_noise_std", "quantization", "rate_quantization")
 }
-
-
-class KeyPathError(ValueError):
-    """A key that cannot be set in the base scenario (``reason`` says why)."""
-
-    def __init__(self, key: str, reason: str):
-        self.key, self.reason = key, reason
-        super().__init__(f"{key}: {reason}")
 
 
 def parse_key(key: str) -> tuple[str | int, ...]:
@@ -67,29 +54,20 @@ def parse_key(key: str) -> tuple[str | int, ...]:
     Raises
     ------
     KeyPathError
-        If ``key`` is not a dotted key (:data:`KEY_PATTERN`) or names no section
-        of the scenario schema.
+        If ``key`` is not a dotted key (:data:`KEY_PATTERN`) or
+        names no section of the scenario schema.
     """
-    if not KEY_PATTERN.fullmatch(key):
+    if not isinstance(key, str) or not KEY_PATTERN.fullmatch(key):
         raise KeyPathError(
-            key, "not a dotted key into the scenario ('sensor.noise_std', 'arm.links[1].length')"
+            str(key),
+            "not a dotted key into the scenario ('sensor.noise_std', 'arm.links[1].length')",
         )
-    parts: tuple[str | int, ...] = tuple(
-        m[1] if m[1] is not None else int(m[2]) for m in _PART.finditer(key)
-    )
+    parts = split_key(key)
     if parts[0] not in SECTIONS:
         raise KeyPathError(key, f"unknown section '{parts[0]}' (sections: {', '.join(SECTIONS)})")
     if len(parts) < 2:
         raise KeyPathError(key, f"name a key inside the section ('{key}.KEY'), not the section")
     return parts
-
-
-def format_key(parts: tuple[str | int, ...]) -> str:
-    """The inverse of :func:`parse_key`."""
-    text = ""
-    for p in parts:
-        text += f"[{p}]" if isinstance(p, int) else (f".{p}" if text else p)
-    return text
 
 
 def flatten(
@@ -118,44 +96,6 @@ def flatten(
             yield key, value
 
 
-def _walk(data: dict[str, Value], parts: tuple[str | int, ...], key: str) -> dict[str, Value]:
-    """The table that holds the last part of ``parts``, tables created on the way."""
-    node: Value = data
-    for k, part in enumerate(parts[:-1]):
-        where = format_key(parts[: k + 1])
-        if isinstance(part, int):
-            if not isinstance(node, list):
-                raise KeyPathError(key, f"'{where}' indexes something that is not an array")
-            if part >= len(node):
-                raise KeyPathError(
-                    key, f"the base scenario's array has {len(node)} items: no '{where}'"
-                )
-            node = node[part]
-        else:
-            if not isinstance(node, dict):
-                raise KeyPathError(key, f"'{format_key(parts[:k])}' is not a table")
-            node = node.setdefault(part, {})
-    if isinstance(parts[-1], int):
-        raise KeyPathError(key, "set an array item's keys ('arm.links[1].length'), not the item")
-    if not isinstance(node, dict):
-        raise KeyPathError(key, f"'{format_key(parts[:-1])}' is not a table")
-    return node
-
-
-def _copy(value: Value) -> Value:
-    """A deep copy of a scenario value (tables, arrays and scalars: what TOML and JSON
-    hold), without ``copy.deepcopy``'s bookkeeping (a sweep copies its base per run)."""
-    if isinstance(value, Mapping):
-        return _copy_table(value)
-    if isinstance(value, list):
-        return [_copy(v) for v in value]
-    return value
-
-
-def _copy_table(table: Mapping[str, Value]) -> dict[str, Value]:
-    return {k: _copy(v) for k, v in table.items()}
-
-
 def with_changes(base: Mapping[str, Value], changes: Mapping[str, Value]) -> dict[str, Value]:
     """A deep copy of ``base`` with each dotted key of ``changes`` set.
 
@@ -172,23 +112,24 @@ def with_changes(base: Mapping[str, Value], changes: Mapping[str, Value]) -> dic
         If a key cannot be set (a bad key, an index beyond the base's array, a
         key inside something that is not a table).
     """
-    data: dict[str, Value] = _copy_table(base)
+    data = copy_value(dict(base))
+    assert isinstance(data, dict)
     parsed = [(key, parse_key(key), value) for key, value in changes.items()]
     kinds = [c for c in parsed if c[1][-1] == "kind"]
     for key, parts, value in kinds:
         if len(parts) == 2:
             data = apply_overrides(data, {str(parts[0]): {"kind": value}})
             continue
-        table = _walk(data, parts, key)
+        table = table_at(data, parts, key)
         default = _NESTED_DEFAULT_KIND.get(tuple(str(p) for p in parts[:-1]))
         if value != table.get("kind", default):
             keep = _KEEP_ON_KIND_CHANGE.get(tuple(str(p) for p in parts[:-1]), ())
             for name in [n for n in table if n not in keep]:
                 del table[name]
-        table["kind"] = _copy(value)
+        table["kind"] = copy_value(value)
     for key, parts, value in parsed:
         if parts[-1] != "kind":
-            _walk(data, parts, key)[str(parts[-1])] = _copy(value)
+            table_at(data, parts, key)[str(parts[-1])] = copy_value(value)
     return data
 
 
