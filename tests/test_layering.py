@@ -46,6 +46,7 @@ WITHIN: dict[str, list[str]] = {
         "arrays",
         "kernel_checks",
         "plant",
+        "drives",
         "foreshortening",
         "packing",
         "kinematics",

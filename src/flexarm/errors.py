@@ -26,6 +26,7 @@ from __future__ import annotations
 from pathlib import Path
 
 __all__ = [
+    "CalibrationError",
     "Cancelled",
     "ClusterError",
     "ConfigError",
@@ -140,3 +141,8 @@ class SweepError(ConfigError):
 
 class SweepTypeError(ConfigTypeError):
     """A sweep that cannot be run: an entry of the wrong type."""
+
+
+class CalibrationError(ConfigError):
+    """A calibration that cannot be run: a wrong value in its configuration, or a
+    record that cannot be read as the configuration says."""

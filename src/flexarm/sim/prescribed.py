@@ -32,7 +32,7 @@ from .chunks import DIVERGED, OK
 from .open_loop import open_loop_result
 from .results import SimulationResult
 
-__all__ = ["JointMotion", "simulate_prescribed"]
+__all__ = ["JointMotion", "motion_from_samples", "simulate_prescribed"]
 
 F64 = NDArray[np.float64]
 _OWNER = "simulate_prescribed"
@@ -41,6 +41,71 @@ JointMotion = Callable[[F64], tuple[ArrayLike, ArrayLike, ArrayLike]]
 """``motion(t) -> (theta, dtheta, ddtheta)``: for times ``t`` (s, shape (m,)), the
 actuated angles (rad), rates (rad/s) and accelerations (rad/s**2), each of shape
 (m, n_links) (or (m,) for one link)."""
+
+
+def motion_from_samples(
+    t: ArrayLike, angles: ArrayLike, smoothing: float | None = None
+) -> JointMotion:
+    """A joint motion from sampled angles: a smoothing spline through each joint's
+    samples, with its first and second derivatives as the rates and accelerations.
+
+    Parameters
+    ----------
+    t : array_like, shape (K,)
+        Increasing sample times, s (at least 5).
+    angles : array_like, shape (K,) or (K, n_links)
+        The measured actuated angles (rad): encoder readings, say.
+    smoothing : float, optional
+        The spline's penalty on its second derivative (``lam`` of
+        :func:`scipy.interpolate.make_smoothing_spline`, in the units of the data:
+        larger is smoother); default: chosen by generalised cross-validation for
+        each joint.
+
+    Returns
+    -------
+    callable
+        ``motion(times) -> (theta, dtheta, ddtheta)``, each of shape (m, n_links)
+        (rad, rad/s, rad/s**2), for :func:`simulate_prescribed`. Outside ``[t[0],
+        t[-1]]`` the spline's end pieces are extrapolated. Its natural end
+        conditions (no curvature at the ends) bend the accelerations near the ends
+        of a motion that does not start and end at rest: there, trim the record.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0.0, 1.0, 201)
+    >>> motion = motion_from_samples(t, np.sin(2 * t), smoothing=1e-9)
+    >>> theta, rate, acc = motion(np.array([0.5]))
+    >>> np.round([theta[0, 0], rate[0, 0], acc[0, 0]], 4).tolist()   # sin 1, 2 cos 1, -4 sin 1
+    [0.8415, 1.0806, -3.3659]
+    """
+    from scipy.interpolate import make_smoothing_spline
+
+    owner = "motion_from_samples"
+    grid = check_array(t, "t", owner, shape=(-1,))
+    if grid.shape[0] < 5 or np.any(np.diff(grid) <= 0):
+        raise InvalidValueError(
+            f"The 't' parameter of {owner} must hold at least 5 increasing times. "
+            f"Got {grid.shape[0]} times instead."
+        )
+    samples = check_array(angles, "angles", owner)
+    if samples.ndim == 1:
+        samples = samples[:, None]
+    if samples.ndim != 2 or samples.shape[0] != grid.shape[0]:
+        raise InvalidValueError(
+            f"The 'angles' parameter of {owner} must be of shape ({grid.shape[0]},) or "
+            f"({grid.shape[0]}, n_links). Got shape {np.shape(angles)} instead."
+        )
+    lam = None if smoothing is None else check_real(smoothing, "smoothing", owner, positive=True)
+    splines = [make_smoothing_spline(grid, samples[:, j], lam=lam) for j in range(samples.shape[1])]
+    derivatives = [(s, s.derivative(1), s.derivative(2)) for s in splines]
+
+    def motion(times: F64) -> tuple[F64, F64, F64]:
+        x = np.asarray(times, dtype=float)
+        parts = [np.column_stack([d[k](x) for d in derivatives]) for k in range(3)]
+        return parts[0], parts[1], parts[2]
+
+    return motion
 
 
 @njit_runtime_free(cache=True, nogil=True)
@@ -154,7 +219,7 @@ def _motion_table(motion: JointMotion, t: F64, substeps: int, n_links: int) -> F
 def simulate_prescribed(
     arm: Plant,
     t: ArrayLike,
-    motion: JointMotion,
+    motion: JointMotion | ArrayLike,
     *,
     initial_state: ArrayLike | None = None,
     substeps: int = 1,
@@ -169,12 +234,14 @@ def simulate_prescribed(
     t : array_like, shape (K,)
         Evenly spaced, increasing times of the result, s; ``substeps`` RK4
         steps per interval.
-    motion : callable
+    motion : callable or array_like
         ``motion(times) -> (theta, dtheta, ddtheta)``, vectorised over times
         (shape (m,), s): the joint angles (rad), rates (rad/s) and accelerations
         (rad/s**2) — the motor angles with flexible joints — each of shape
         (m, n_links). Evaluated once, at every half substep. ``dtheta`` and
-        ``ddtheta`` must be the derivatives of ``theta``.
+        ``ddtheta`` must be the derivatives of ``theta``. Or the measured angles
+        at ``t`` themselves, shape (K,) or (K, n_links) (rad): the motion is then
+        :func:`motion_from_samples` of them (a smoothing spline).
     initial_state : array_like, shape (2 n_dof,), optional
         ``(q, dq)`` at ``t[0]``; its actuated entries are replaced by the
         motion's. Default: straight links at rest (and, with flexible joints,
@@ -220,7 +287,10 @@ def simulate_prescribed(
         )
     substeps = check_int(substeps, "substeps", _OWNER, minimum=1)
     n, n_links = arm.n_dof, arm.n_links
-    table = _motion_table(motion, grid, substeps, n_links)
+    source = motion
+    if isinstance(motion, np.ndarray | list | tuple):  # measured angles: a spline through them
+        source = motion_from_samples(grid, motion)
+    table = _motion_table(source, grid, substeps, n_links)  # type: ignore[arg-type]
     x0 = (
         np.zeros(2 * n)
         if initial_state is None

@@ -57,7 +57,14 @@ from .scenario_schema import (
 )
 from .settings import SimulationSettings
 
-__all__ = ["SENSORS", "TRAJECTORIES", "Scenario", "load_scenario", "sensor_path_length"]
+__all__ = [
+    "SENSORS",
+    "TRAJECTORIES",
+    "Scenario",
+    "arm_from_tables",
+    "load_scenario",
+    "sensor_path_length",
+]
 
 TRAJECTORIES: dict[str, type] = {
     "square": Square,
@@ -99,6 +106,19 @@ def sensor_path_length(arm: FlexibleArm, sensor: Sensor) -> float:
     if link < 0:
         return 0.0
     return float(sum(lk.length for lk in arm.links[:link]) + distance)
+
+
+def arm_from_tables(data: Mapping[str, Any], source: str = "scenario") -> FlexibleArm:
+    """The arm of a mapping's ``[arm]`` section (the scenario schema's; other sections
+    are not read): how a calibration's or any other file's arm is built.
+
+    Raises
+    ------
+    ScenarioError
+        For an unknown or missing key or a value the library rejects, naming
+        ``source`` and the dotted key.
+    """
+    return _arm(ScenarioReader(source), data)[0]
 
 
 def load_scenario(path: str | os.PathLike[str]) -> Scenario:
