@@ -10,8 +10,8 @@ import json
 import numpy as np
 import pytest
 
-import flexarm.ident.convergence
 import flexarm.ident.fits
+import flexarm.ident.regression.convergence
 from flexarm.cli import main
 from flexarm.ident import SemiRecursiveKernelRegression
 
@@ -320,7 +320,7 @@ def _bug(*args, **kwargs):
     [
         (flexarm.ident.fits, "fit_regression", ["fit", "{csv}"]),
         (flexarm.ident.fits, "fit_hammerstein", ["hammerstein", "{csv}"]),
-        (flexarm.ident.convergence, "convergence_study", ["study"]),
+        (flexarm.ident.regression.convergence, "convergence_study", ["study"]),
     ],
 )
 def test_a_plain_value_error_is_a_bug_not_exit_2(monkeypatch, files, module, name, argv):

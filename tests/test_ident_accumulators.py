@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from flexarm.ident import KERNELS, NadarayaWatson, SemiRecursiveKernelRegression
-from flexarm.ident.accumulators import (
+from flexarm.ident.regression.accumulators import (
     Accumulator,
     BinnedSums,
     ExactSamples,

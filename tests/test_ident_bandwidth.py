@@ -18,7 +18,7 @@ from flexarm.ident import (
     convergence_study,
     silverman_bandwidth,
 )
-from flexarm.ident.hammerstein import DEFAULT_BANDWIDTH
+from flexarm.ident.hammerstein.identifier import DEFAULT_BANDWIDTH
 
 N = 400
 

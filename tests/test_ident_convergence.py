@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from flexarm.ident import ConvergenceResult, convergence_study
-from flexarm.ident.convergence import FUNCTIONS, regression_function
+from flexarm.ident.regression.convergence import FUNCTIONS, regression_function
 
 NS = (250, 500, 1000, 2000, 4000, 8000)
 

@@ -15,7 +15,7 @@ from flexarm.ident import (
     SemiRecursiveKernelRegression,
     evaluate_kernel,
 )
-from flexarm.ident.kernels import kernel_code, kernel_weight
+from flexarm.ident.regression.kernels import kernel_code, kernel_weight
 
 # Independent one-dimensional profiles, written out again here.
 PROFILES = {
@@ -477,7 +477,7 @@ def test_binned_error_within_stated_bound(which, kernel, r):
     ok = np.isfinite(m) & np.isfinite(bound)
     assert ok.sum() > 60
     assert np.all(np.abs(est.predict(x)[ok] - m[ok]) <= bound[ok])
-    # the stated per-weight bound, recomputed from the formulas of flexarm.ident.binning
+    # the stated per-weight bound, recomputed from the formulas of flexarm.ident.regression.binning
     m1 = {"gaussian": 2 / np.e, "epanechnikov": 1.5, "triangular": 1.0}[kernel]
     interp = {"gaussian": r**2 / 8, "epanechnikov": 3 * r**2 / 16 + 3 * r / 8}.get(kernel, r / 2)
     tau = np.exp(-81 / (2 * (1 + r**2))) + 1e-12 if kernel == "gaussian" else 0.0

@@ -23,7 +23,7 @@ from flexarm.ident import (
     RecursiveKernelRegression,
     SemiRecursiveKernelRegression,
 )
-from flexarm.ident.accumulators import (
+from flexarm.ident.regression.accumulators import (
     BLOCK,
     ExactSamples,
     GridSums,
@@ -31,7 +31,7 @@ from flexarm.ident.accumulators import (
     Smoothing,
     choose,
 )
-from flexarm.ident.accumulators.blocks import segments
+from flexarm.ident.regression.accumulators.blocks import segments
 
 GRID = np.linspace(-0.1, 1.1, 23)[::-1]  # unsorted, partly outside the data
 
@@ -468,7 +468,7 @@ def test_series_bad_values(value, exc, match):
 
 
 def test_split_over_threads_changes_no_bit(monkeypatch):
-    from flexarm.ident.accumulators import _threads
+    from flexarm.ident.regression.accumulators import _threads
 
     X, y = data(3000, d=2, seed=12)
     grid2 = np.random.default_rng(13).uniform(0, 1, (40, 2))

@@ -101,7 +101,7 @@ def _run(
 def _fit_data(args: argparse.Namespace) -> int:
     from ..ident.data import read_xy
     from ..ident.fits import fit_hammerstein
-    from ..ident.whiteness import IdentificationWarning
+    from ..ident.hammerstein.whiteness import IdentificationWarning
 
     t0 = time.perf_counter()
     columns = given(args, x="x", y="y")

@@ -38,12 +38,12 @@ from ..figures import (
     style,
     styled,
 )
-from .bandwidth import Silverman, as_rule
-from .bootstrap import Bands
-from .correlation import KnownPoints
-from .hammerstein import DEFAULT_BANDWIDTH, HammersteinIdentifier
-from .kernels import KernelFunction
-from .regression import SemiRecursiveKernelRegression
+from .hammerstein.bootstrap import Bands
+from .hammerstein.identifier import DEFAULT_BANDWIDTH, HammersteinIdentifier
+from .hammerstein.solution import KnownPoints
+from .regression.bandwidth import Silverman, as_rule
+from .regression.estimators import SemiRecursiveKernelRegression
+from .regression.kernels import KernelFunction
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -242,7 +242,7 @@ def fit_regression(
     kernel, bandwidth, decay, binned, series
         As :class:`~flexarm.ident.SemiRecursiveKernelRegression`; the default
         bandwidth is Silverman's rule for the last sample
-        (:mod:`flexarm.ident.bandwidth`).
+        (:mod:`flexarm.ident.regression.bandwidth`).
     grid : int, default 512
         Points of the grid, equispaced from ``min(x)`` to ``max(x)`` (>= 2).
     x_label, y_label : str
@@ -376,7 +376,7 @@ class HammersteinFit:
         -------
         matplotlib.figure.Figure
         """
-        from .bootstrap import draw_impulse_band, draw_phi_band
+        from .hammerstein.bootstrap import draw_impulse_band, draw_phi_band
 
         if fig is None:
             fig = new_figure(DOUBLE_COLUMN, 2.5)

@@ -22,7 +22,7 @@ from .parameters import DriveNonlinearity
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from ...ident.hammerstein import HammersteinIdentifier
+    from ...ident.hammerstein.identifier import HammersteinIdentifier
 
 __all__ = ["SAVED_FILES", "CurveEstimate", "JointIdentification", "saved_files"]
 
