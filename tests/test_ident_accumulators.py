@@ -199,7 +199,7 @@ def test_estimator_file_is_the_hyperparameters_plus_the_accumulator_state(tmp_pa
     est.save(tmp_path / "e.npz")
     with np.load(tmp_path / "e.npz", allow_pickle=False) as z:
         saved = {k: z[k] for k in z.files}
-    acc_state = est._acc.state()
+    acc_state = est.state_.accumulator.state()
     for k, v in acc_state.items():  # the accumulator's state, unchanged
         np.testing.assert_array_equal(saved[k], v, err_msg=k)
     header = set(saved) - set(acc_state)

@@ -387,9 +387,16 @@ def test_bad_input(params, X, y, exc, match):
         SemiRecursiveKernelRegression(**params).partial_fit(X, y)
 
 
-def test_decay_at_the_bound_is_allowed():
-    SemiRecursiveKernelRegression(decay=0.5, bandwidth=0.5).fit(X2, Y2)
-    SemiRecursiveKernelRegression(decay=1.0, bandwidth=0.5).fit(X1, Y1)
+@pytest.mark.parametrize(("decay", "X", "y"), [(0.5, X2, Y2), (1.0, X1, Y1)], ids=["d2", "d1"])
+def test_decay_at_the_bound_is_allowed(decay, X, y):
+    """``decay = 1/d`` is accepted, and the estimate is eq. 14 with that decay."""
+    est = SemiRecursiveKernelRegression(decay=decay, bandwidth=0.5).fit(X, y)
+    q = np.asarray(X)[::3]
+    np.testing.assert_allclose(est.predict(q), eq14(q, X, y, 0.5, decay, "gaussian"), rtol=1e-11)
+    h = 0.5 * np.arange(1, len(y) + 1) ** -decay
+    np.testing.assert_allclose(
+        est.bandwidths_, np.repeat(h[:, None], est.n_features_in_, 1), rtol=1e-14
+    )
 
 
 def test_bad_input_after_fit():

@@ -178,14 +178,14 @@ def make(mode):
 
 def check_same(a, b):
     np.testing.assert_array_equal(a.predict(X_Q), b.predict(X_Q))
-    same_state(a._acc, b._acc)
+    same_state(a.state_.accumulator, b.state_.accumulator)
 
 
 @pytest.mark.parametrize("mode", sorted(ESTIMATORS))
 def test_fit_chunks_and_partial_fit_equal_fit(big, mode):
     X, y = big
     whole = make(mode).fit(X, y)
-    assert type(whole._acc).mode == mode
+    assert type(whole.state_.accumulator).mode == mode
     sizes = [1, 999, BLOCK - 1000, 2, 12345, BLOCK, 10**9]
     edges = np.minimum(np.cumsum([0, *sizes]), N_BIG)
     chunks = [(X[a:b], y[a:b]) for a, b in itertools.pairwise(edges) if b > a]
@@ -221,7 +221,7 @@ def test_format_1_files_still_load(big, mode, tmp_path):
     X, y = big
     cut = BLOCK + 777
     est = make(mode).partial_fit(X[:cut], y[:cut])
-    state = est._state()
+    state = est.to_arrays()
     old = {k: v for k, v in state.items() if not k.startswith("open_") and k != "block"}
     old["format"] = np.array(1)
     old["series"] = np.array(mode == "series")  # format 1 stored a bool
@@ -254,7 +254,7 @@ def test_iterator_fit_in_bounded_memory():
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()
-    assert est.n_samples_ == n and isinstance(est._acc, SeriesMoments)
+    assert est.n_samples_ == n and isinstance(est.state_.accumulator, SeriesMoments)
     assert peak < 2 * 2**20, peak  # << 16 MB: a few chunks (160 kB each) and the state
     grid = np.linspace(0, 1, 64)[8:-8]  # away from the edges' bias
     assert np.max(np.abs(est.predict(grid) - np.sin(2 * np.pi * grid))) < 0.1
@@ -394,11 +394,11 @@ def test_auto_series_is_picked_where_documented(cls, kw, series):
     X, y = data(300, seed=11)
     est = cls(**{"bandwidth": 0.05, **kw}).fit(X[:, 0], y)
     assert est.series == kw.get("series", "auto")
-    assert est._acc.setup.series is series
+    assert est.state_.accumulator.setup.series is series
     if "grid" in kw:
-        assert isinstance(est._acc, SeriesMoments) is series
+        assert isinstance(est.state_.accumulator, SeriesMoments) is series
     two_d = NadarayaWatson(bandwidth=0.05).fit(*data(50, d=2))
-    assert two_d._acc.setup.series is False
+    assert two_d.state_.accumulator.setup.series is False
 
 
 def oracle(x, X, y, h):
@@ -437,7 +437,7 @@ def test_auto_series_agrees_with_direct_summation_to_1e12(case, gridded):
     X, y, h, x = adversarial(case, np.random.default_rng(CASES.index(case)))
     kw = {"grid": x} if gridded else {}
     auto = NadarayaWatson(bandwidth=h, **kw).fit(X, y)
-    assert auto._acc.setup.series  # the series is what is measured here
+    assert auto.state_.accumulator.setup.series  # the series is what is measured here
     direct = NadarayaWatson(bandwidth=h, series=False, **kw).fit(X, y).predict(x)
     got = auto.predict(x)
     N, D, A = oracle(x, X, y, h)
@@ -481,5 +481,5 @@ def test_split_over_threads_changes_no_bit(monkeypatch):
             monkeypatch.setattr(_threads, "MIN_WORK", 2**62)
             serial = cls(**kw, grid=g).fit(XX, y).predict(q)
             monkeypatch.setattr(_threads, "MIN_WORK", 1)
-            assert _threads.workers(10**6, 40) == min(_threads._cores(), 40)
+            assert _threads.workers(10**6, 40) == min(_threads.cores(), 40)
             np.testing.assert_array_equal(cls(**kw, grid=g).fit(XX, y).predict(q), serial)

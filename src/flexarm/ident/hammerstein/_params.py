@@ -32,47 +32,51 @@ _OWNER = "HammersteinIdentifier"
 CORRELATED_MAX_ORDER = 10
 
 
-def validate(est: Any) -> dict[str, Any]:
-    """The hyperparameters of ``est``, checked (called by the first fit / partial_fit)."""
+def validate(given: Mapping[str, Any]) -> dict[str, Any]:
+    """The hyperparameters ``given`` (``get_params()``), checked by the first fit or partial_fit."""
     p: dict[str, Any] = {}
-    p["n_lags"] = check_int(est.n_lags, "n_lags", _OWNER, minimum=1)
+    p["n_lags"] = check_int(given["n_lags"], "n_lags", _OWNER, minimum=1)
     p["max_order"] = (
-        None if est.max_order is None else check_int(est.max_order, "max_order", _OWNER, minimum=0)
+        None
+        if given["max_order"] is None
+        else check_int(given["max_order"], "max_order", _OWNER, minimum=0)
     )
-    if isinstance(est.order, str):
-        p["order"] = check_option(est.order, "order", _OWNER, ORDER_RULES)
+    if isinstance(given["order"], str):
+        p["order"] = check_option(given["order"], "order", _OWNER, ORDER_RULES)
         top = WHITE_MAX_ORDER if p["max_order"] is None else p["max_order"]
     else:
-        p["order"] = check_int(est.order, "order", _OWNER, minimum=0)
+        p["order"] = check_int(given["order"], "order", _OWNER, minimum=0)
         top = p["order"]
     if p["n_lags"] < 2 * top + 2:
         raise InvalidValueError(
             f"The 'n_lags' parameter of {_OWNER} must be >= 2 * order + 2 = {2 * top + 2} "
             f"to fit ARMA order {top}. Got {p['n_lags']} instead."
         )
-    p["instrument"] = check_option(est.instrument, "instrument", _OWNER, INSTRUMENTS)
-    p["kernel"] = check_option(est.kernel, "kernel", _OWNER, KERNELS)
-    rule = as_rule(est.bandwidth, _OWNER)
+    p["instrument"] = check_option(given["instrument"], "instrument", _OWNER, INSTRUMENTS)
+    p["kernel"] = check_option(given["kernel"], "kernel", _OWNER, KERNELS)
+    rule = as_rule(given["bandwidth"], _OWNER)
     p["bandwidth"] = (
-        rule if rule is not None else check_real(est.bandwidth, "bandwidth", _OWNER, positive=True)
+        rule
+        if rule is not None
+        else check_real(given["bandwidth"], "bandwidth", _OWNER, positive=True)
     )
-    decay = check_real(est.decay, "decay", _OWNER, nonnegative=True)
+    decay = check_real(given["decay"], "decay", _OWNER, nonnegative=True)
     if decay > 1.0:
         raise InvalidValueError(
             f"The 'decay' parameter of {_OWNER} must be <= 1. Got {decay} instead."
         )
     p["decay"] = decay
-    p["grid_size"] = check_int(est.grid_size, "grid_size", _OWNER, minimum=8)
-    p["known_points"] = check_known_points(est.known_points, _OWNER)
-    p["warmup"] = check_int(est.warmup, "warmup", _OWNER, minimum=8)
-    p["method"] = check_option(est.method, "method", _OWNER, METHODS)
-    if isinstance(est.n_knots, str):
-        check_option(est.n_knots, "n_knots", _OWNER, ("auto",))
+    p["grid_size"] = check_int(given["grid_size"], "grid_size", _OWNER, minimum=8)
+    p["known_points"] = check_known_points(given["known_points"], _OWNER)
+    p["warmup"] = check_int(given["warmup"], "warmup", _OWNER, minimum=8)
+    p["method"] = check_option(given["method"], "method", _OWNER, METHODS)
+    if isinstance(given["n_knots"], str):
+        check_option(given["n_knots"], "n_knots", _OWNER, ("auto",))
         p["n_knots"] = None
     else:
-        p["n_knots"] = check_int(est.n_knots, "n_knots", _OWNER, minimum=2)
-    p["validation_fraction"] = check_fraction(est.validation_fraction, _OWNER)
-    alpha = check_real(est.alpha, "alpha", _OWNER, positive=True)
+        p["n_knots"] = check_int(given["n_knots"], "n_knots", _OWNER, minimum=2)
+    p["validation_fraction"] = check_fraction(given["validation_fraction"], _OWNER)
+    alpha = check_real(given["alpha"], "alpha", _OWNER, positive=True)
     if not alpha < 1.0:
         raise InvalidValueError(
             f"The 'alpha' parameter of {_OWNER} must be in (0, 1). Got {alpha} instead."

@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..._validation import check_int, check_real, check_rng
 from ...errors import InvalidValueError
 from ...figures import DOUBLE_COLUMN, new_figure, styled
+from ._state import HammersteinState
 from .correlated.arx import fit_structure
 from .correlated.hatbasis import evaluate, locate
 from .correlated.solve import normalise
@@ -154,12 +155,14 @@ def draw_impulse_band(ax: Any, bands: Bands) -> None:
 
 class FittedIdentifier(Protocol):
     """What :func:`bootstrap_bands` reads of a fitted
-    :class:`~flexarm.ident.hammerstein.identifier.HammersteinIdentifier`: its settings, the path
-    it took and the structure it found, refitted on each resampled record."""
+    :class:`~flexarm.ident.hammerstein.identifier.HammersteinIdentifier`: its settings
+    (the checked hyperparameters of its state), the path it took and the structure it
+    found, refitted on each resampled record."""
 
     n_lags: int
-    _params: dict[str, Any]  # the checked hyperparameters
 
+    @property
+    def state_(self) -> HammersteinState: ...
     @property
     def n_samples_(self) -> int: ...
     @property
@@ -178,7 +181,7 @@ class FittedIdentifier(Protocol):
 
 def _replicate(est: FittedIdentifier, u: F64, y: F64) -> tuple[F64, F64, F64] | None:
     """``(grid, phi, impulse)`` of one resampled record by the fitted path and structure."""
-    p = est._params
+    p = est.state_.checked
     if est.method_ == "white":
         try:
             sol = white_solution(p, u, y)
@@ -250,7 +253,7 @@ def bootstrap_bands(
     gen = check_rng(rng, owner)
     grid, phi, lam = est.grid_, est.nonlinearity_, est.impulse_response_
     weights = est.input_weights_
-    known = est._params["known_points"] is not None
+    known = est.state_.checked["known_points"] is not None
     phis, lams = [], []
     for _ in range(reps):
         idx = circular_blocks(n, block, gen)

@@ -5,25 +5,13 @@ subsystem, :mod:`flexarm.ident.hammerstein.systems`). :class:`HammersteinIdentif
 paths and tells which it took (``method_``, ``report_``):
 
 * **White input: the paper's correlation approach** (exact for i.i.d. input,
-  streaming). For every lag ``k``, ``m_k(x) = E[Y_{n+k} | X_n = x] =
-  lambda_k phi(x) + c_k``: the centred lag regressions, each the paper's
-  semi-recursive kernel estimate (eq. 14) on a grid, form a rank-one array.
-  The impulse response is the covariance with an instrument (``"auto"``: the
-  leading singular pair, which also serves an even ``phi`` and a delayed linear
-  part; ``"regression"``: ``m_0``, the paper's; ``"input"``: ``x``), the shape
-  of ``phi`` their least-squares combination, normalised by two known points
-  (the paper's ``d1``, ``alpha``) or else with the impulse response's largest
-  entry ``+1`` and ``phi`` of mean zero; the ARMA coefficients come from the
-  impulse response (:mod:`~flexarm.ident.hammerstein.white.arma`, order by BIC). Steps:
-  :mod:`~flexarm.ident.hammerstein.white.lags`,
-  :func:`~flexarm.ident.hammerstein.white.correlation.solve`.
-* **Correlated input** (:mod:`flexarm.ident.hammerstein.correlated.solve`): the ARX-Hammerstein
-  structure fitted directly — over-parameterised least squares on a
-  piecewise-linear basis for ``phi`` with knots at the input's quantiles,
-  Bai's rank-one separation, instrumental variables kept when they lower the
-  output error (:mod:`flexarm.ident.hammerstein.correlated.arx`); order and knots by the
-  one-standard-error rule on held-out free-run error
-  (:mod:`flexarm.ident.hammerstein.correlated.selection`). Still nonparametric in ``phi``.
+  streaming): the lag regressions ``m_k(x) = E[Y_{n+k} | X_n = x] = lambda_k
+  phi(x) + c_k``, each the paper's semi-recursive kernel estimate (eq. 14) on a
+  grid, form a rank-one array; the impulse response, ``phi`` and the ARMA model
+  follow from it (:mod:`~flexarm.ident.hammerstein.white`).
+* **Correlated input**: the ARX-Hammerstein structure fitted directly, ``phi``
+  on a piecewise-linear basis, order and knots chosen on held-out data; still
+  nonparametric in ``phi`` (:mod:`~flexarm.ident.hammerstein.correlated`).
 
 ``method="auto"`` (default) takes the white path when the input passes the
 whiteness test (:func:`~flexarm.ident.hammerstein.whiteness.whiteness_test`: Ljung–Box and
@@ -48,13 +36,18 @@ The white path's state is the lag regressions' running sums:
 :meth:`~HammersteinIdentifier.save` / :meth:`~HammersteinIdentifier.load`
 resume it exactly (the streaming state, :mod:`flexarm.ident.regression.accumulators`).
 The correlated path needs the whole record (one :meth:`~HammersteinIdentifier.fit`);
-its fitted model is saved and loaded too (``flexarm.ident.hammerstein._persist``).
+its fitted model is saved and loaded too. Everything a fit leaves is one frozen
+value, :attr:`~HammersteinIdentifier.state_` (a :class:`HammersteinState`), and
+``partial_fit`` continues only while the hyperparameters keep the values the
+first call froze, compared as values (arrays element by element; the kernel
+regressions follow the same rule).
 """
 
 from __future__ import annotations
 
-import os
 import warnings
+from collections.abc import Mapping
+from dataclasses import replace
 from typing import Any, Self
 
 import numpy as np
@@ -62,31 +55,24 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..._validation import check_array
 from ...errors import InvalidValueError
-from .._estimator import HyperParameters, NotFittedError
+from .._estimator import NotFittedError, SavedEstimator, frozen_params
 from ..regression.bandwidth import Silverman
 from ..regression.estimators import SemiRecursiveKernelRegression
 from ._params import check_length, choose_path, correlated_orders, validate
-from ._persist import load, save
+from ._state import HammersteinState, state_arrays, state_from_arrays
 from .bootstrap import Bands, bootstrap_bands
 from .correlated.hatbasis import evaluate, locate
 from .correlated.selection import Selection
-from .correlated.solve import CorrelatedResult, solve_correlated
-from .linear import LinearARX
-from .prediction import (
-    check_input,
-    check_record,
-    fit_percent,
-    max_lag,
-    predict_output,
-    r2_score,
-)
+from .correlated.solve import solve_correlated
+from .linear import LinearARX, baseline_fit
+from .prediction import Scored, check_input, check_record, fit_percent, max_lag, predict_output
 from .report import IdentificationReport, build_report
 from .solution import KnownPoints, Solution
 from .systems import ARMA
 from .white.lags import LagRegressions, solve_white
-from .whiteness import DEFAULT_ALPHA, IdentificationWarning
+from .whiteness import DEFAULT_ALPHA, IdentificationWarning, WhitenessReport
 
-__all__ = ["DEFAULT_BANDWIDTH", "HammersteinIdentifier"]
+__all__ = ["DEFAULT_BANDWIDTH", "HammersteinIdentifier", "HammersteinState"]
 
 F64 = NDArray[np.float64]
 _OWNER = "HammersteinIdentifier"
@@ -95,7 +81,7 @@ _OWNER = "HammersteinIdentifier"
 DEFAULT_BANDWIDTH = Silverman(0.55)
 
 
-class HammersteinIdentifier(HyperParameters):
+class HammersteinIdentifier(Scored, SavedEstimator[HammersteinState]):
     """Identify a Hammerstein system from input/output data (module docstring).
 
     Parameters
@@ -168,6 +154,8 @@ class HammersteinIdentifier(HyperParameters):
         ``s[1] / s[0]`` small for a Hammerstein system.
     bandwidth_, regressions_ :
         White path: ``h_1`` and the lag regressions (grid mode).
+    state_ : HammersteinState
+        Everything the fit left, in one frozen value.
 
     Examples
     --------
@@ -216,14 +204,9 @@ class HammersteinIdentifier(HyperParameters):
 
     def _validated(self) -> dict[str, Any]:
         """The hyperparameters, checked (:func:`~flexarm.ident.hammerstein._params.validate`)."""
-        return validate(self)
+        return validate(self.get_params())
 
     # ---------------------------------------------------------------- fitting
-
-    def _reset(self) -> None:
-        for name in ("_params", "_frozen", "_lags", "_cache", "_path", "_result", "_report",
-                     "whiteness_", "baseline_", "_n_seen"):  # fmt: skip
-            self.__dict__.pop(name, None)
 
     def fit(self, u: ArrayLike, y: ArrayLike) -> Self:
         """Forget any previous state and identify the system from one record.
@@ -245,7 +228,7 @@ class HammersteinIdentifier(HyperParameters):
         check_length(p, ua.shape[0])
         check_record(ua, ya, _OWNER, varying=True)
         path, reason, white = choose_path(p, ua)
-        self._reset()
+        self._forget()
         notes: list[str] = []
         if path == "white" and not white.white:
             notes.append(f"the white-input path was forced on an input that is not white: {reason}")
@@ -258,30 +241,31 @@ class HammersteinIdentifier(HyperParameters):
             baseline.fit(ua, ya)
         else:
             self._start_correlated(p, ua, ya)
-            baseline._fit(ua, ya, self._result.selection, p["n_lags"])
-        self.whiteness_ = white
-        self.baseline_ = baseline
-        self._report = build_report(
+            result = self._fitted_state().result
+            assert result is not None
+            fit = baseline_fit(ua, ya, result.selection, p["n_lags"], frozen_params(baseline))
+            baseline = LinearARX.from_state(fit)
+        self._set_state(replace(self._fitted_state(), whiteness=white, baseline=baseline))
+        report = build_report(
             p,
             path,
             reason,
             white,
             self._solution(),
-            self.__dict__.get("_result"),
+            self._fitted_state().result,
             fit_percent(ya, self.predict(ua)),
             baseline,
             baseline.fit_percent(ua, ya),
             notes,
         )
-        for note in self._report.warnings:
+        self._set_state(replace(self._fitted_state(), report=report))
+        for note in report.warnings:
             warnings.warn(note, IdentificationWarning, stacklevel=2)
         return self
 
     def _start_correlated(self, p: dict[str, Any], u: F64, y: F64) -> None:
         order, top = correlated_orders(p)
-        self._params, self._frozen, self._path = p, self.get_params(), "correlated"
-        self._n_seen = int(u.shape[0])
-        self._result = solve_correlated(
+        result = solve_correlated(
             u,
             y,
             n_lags=p["n_lags"],
@@ -292,7 +276,16 @@ class HammersteinIdentifier(HyperParameters):
             validation_fraction=p["validation_fraction"],
             owner=_OWNER,
         )
-        self._cache = self._result.solution
+        self._set_state(
+            HammersteinState(
+                self._freeze(),
+                p,
+                "correlated",
+                solution=result.solution,
+                n_samples=int(u.shape[0]),
+                result=result,
+            )
+        )
 
     def partial_fit(self, u: ArrayLike, y: ArrayLike) -> Self:
         """Add a chunk of the record to the white path; chunks give bit for bit what one fit gives.
@@ -314,28 +307,23 @@ class HammersteinIdentifier(HyperParameters):
         self
         """
         ua, ya = check_record(u, y, _OWNER, 0)
-        if self.__dict__.get("_path") == "correlated" or self.method == "correlated":
+        fitted = self._is_fitted()
+        if (fitted and self._fitted_state().path == "correlated") or self.method == "correlated":
             raise InvalidValueError(
                 f"The 'method' parameter of {_OWNER} must be 'auto' or 'white' to stream with "
                 "partial_fit (the correlated-input path needs the whole record: call fit). "
                 "Got a correlated-path identifier instead."
             )
-        if "_params" not in self.__dict__:
-            self._params = self._validated()
-            self._frozen = self.get_params()
-            self._lags = LagRegressions(self._params, _OWNER)
-            self._path = "white"
+        if not fitted:
+            p = self._validated()
+            state = HammersteinState(self._freeze(), p, "white", lags=LagRegressions(p, _OWNER))
         else:
-            now = self.get_params()
-            changed = sorted(k for k in now if repr(now[k]) != repr(self._frozen[k]))
-            if changed:
-                raise InvalidValueError(
-                    f"The {changed} parameter(s) of {_OWNER} changed since the first "
-                    "partial_fit. Got new values instead; call fit to start again."
-                )
-        self.__dict__.pop("_cache", None)
-        self.__dict__.pop("_report", None)
-        self._lags.add_chunk(ua, ya)
+            state = self._fitted_state()
+            self._check_unchanged(state)
+            state = replace(state, solution=None, report=None)  # the next chunk moves the model
+        self._set_state(state)
+        assert state.lags is not None
+        state.lags.add_chunk(ua, ya)
         return self
 
     # ---------------------------------------------------------------- state
@@ -343,26 +331,39 @@ class HammersteinIdentifier(HyperParameters):
     @property
     def method_(self) -> str:
         """The path used: ``"white"`` or ``"correlated"``."""
-        path: str | None = self.__dict__.get("_path")
-        if path is None:
-            raise NotFittedError(f"This {_OWNER} instance is not fitted yet.")
-        return path
+        return self._fitted_state().path
+
+    def _after_fit(self, name: str) -> Any:
+        """The state's ``name``, which only :meth:`fit` sets."""
+        value = getattr(self._fitted_state(), name)
+        if value is None:
+            raise NotFittedError(
+                f"This {_OWNER} instance has no {name}: call 'fit' (partial_fit streams "
+                "without one)."
+            )
+        return value
 
     @property
     def report_(self) -> IdentificationReport:
         """What the last :meth:`fit` did (path, reason, structure, baseline, warnings)."""
-        report: IdentificationReport | None = self.__dict__.get("_report")
-        if report is None:
-            raise NotFittedError(
-                f"This {_OWNER} instance has no report: call 'fit' (partial_fit streams "
-                "without one)."
-            )
+        report: IdentificationReport = self._after_fit("report")
         return report
+
+    @property
+    def whiteness_(self) -> WhitenessReport | None:
+        """The input's whiteness (None after :meth:`partial_fit` alone)."""
+        return self._fitted_state().whiteness
+
+    @property
+    def baseline_(self) -> LinearARX:
+        """The linear baseline fitted to the same record by :meth:`fit`."""
+        baseline: LinearARX = self._after_fit("baseline")
+        return baseline
 
     @property
     def selection_(self) -> Selection:
         """Correlated path: the structures tried on held-out data and the choice."""
-        result: CorrelatedResult | None = self.__dict__.get("_result")
+        result = self._fitted_state().result
         if result is None:
             raise AttributeError(
                 f"{_OWNER}.selection_ exists after a correlated-path fit in this session "
@@ -373,18 +374,14 @@ class HammersteinIdentifier(HyperParameters):
     @property
     def n_samples_(self) -> int:
         """Samples seen."""
-        if self.__dict__.get("_path") == "correlated":
-            return int(self._n_seen)
-        lags: LagRegressions | None = self.__dict__.get("_lags")
-        if lags is None:
-            raise NotFittedError(f"This {_OWNER} instance is not fitted yet.")
-        return lags.n_samples
+        state = self._fitted_state()
+        return state.n_samples if state.lags is None else state.lags.n_samples
 
     def _started(self, name: str) -> LagRegressions:
-        if self.__dict__.get("_path") == "correlated":
+        lags = self._fitted_state().lags
+        if lags is None:
             raise AttributeError(f"{_OWNER}.{name} exists on the white-input path only.")
-        lags: LagRegressions | None = self.__dict__.get("_lags")
-        if lags is None or lags.regressions is None:
+        if lags.regressions is None:
             raise NotFittedError(
                 f"This {_OWNER} instance has no {name} yet (fewer than warmup samples seen)."
             )
@@ -403,18 +400,18 @@ class HammersteinIdentifier(HyperParameters):
         return regs
 
     def _solution(self) -> Solution:
-        cached: Solution | None = self.__dict__.get("_cache")
-        if cached is not None:
-            return cached
-        lags: LagRegressions | None = self.__dict__.get("_lags")
-        if lags is None or not lags.ready:
+        state = self._fitted_state() if self._is_fitted() else None
+        if state is not None and state.solution is not None:
+            return state.solution
+        lags = None if state is None else state.lags
+        if state is None or lags is None or not lags.ready:
             raise NotFittedError(
                 f"This {_OWNER} instance is not fitted yet (or has seen fewer than "
                 "warmup + n_lags samples). Call 'fit' or 'partial_fit' with more data "
                 "before using this estimator."
             )
-        sol = solve_white(self._params, lags)
-        self._cache = sol
+        sol = solve_white(state.checked, lags)
+        self._set_state(replace(state, solution=sol))
         return sol
 
     @property
@@ -476,7 +473,7 @@ class HammersteinIdentifier(HyperParameters):
 
     def _phi(self, x: F64) -> F64:
         sol = self._solution()
-        if self.__dict__.get("_path") == "correlated":
+        if self._fitted_state().path == "correlated":
             return evaluate(*locate(x.ravel(), sol.grid), sol.nonlinearity).reshape(x.shape)
         out: F64 = np.interp(x, sol.grid, sol.nonlinearity)
         return out
@@ -531,22 +528,6 @@ class HammersteinIdentifier(HyperParameters):
             sol.arma.model, self._phi(ua), sol.offset, y, steps_ahead, owner=owner
         )
 
-    def score(self, u: ArrayLike, y: ArrayLike, steps_ahead: int | None = None) -> float:
-        """R² of :meth:`predict` on ``(u, y)`` (scikit-learn's ``score``; 1 is perfect).
-
-        With ``steps_ahead``, of the k-step prediction; otherwise of the free run from rest.
-        """
-        ua, ya = check_record(u, y, f"{_OWNER}.score")
-        return r2_score(ya, self.predict(ua, ya if steps_ahead else None, steps_ahead))
-
-    def fit_percent(self, u: ArrayLike, y: ArrayLike, steps_ahead: int | None = None) -> float:
-        """Fit in percent, ``100 (1 - ||y - y_hat|| / ||y - mean y||)``, of :meth:`predict`.
-
-        With ``steps_ahead``, of the k-step prediction; otherwise of the free run from rest.
-        """
-        ua, ya = check_record(u, y, f"{_OWNER}.fit_percent")
-        return fit_percent(ya, self.predict(ua, ya if steps_ahead else None, steps_ahead))
-
     def bands(
         self,
         u: ArrayLike,
@@ -566,35 +547,19 @@ class HammersteinIdentifier(HyperParameters):
 
     # ---------------------------------------------------------------- persistence
 
-    def save(self, path: str | os.PathLike[str]) -> None:
-        """Write the identifier to ``path`` (NumPy ``.npz``, plain arrays, atomically).
+    def to_arrays(self) -> dict[str, NDArray[Any]]:
+        """The hyperparameters and the state as plain arrays: what :meth:`save` writes.
 
-        White path: the hyperparameters and the streaming state, at any point
-        after the first :meth:`fit` or :meth:`partial_fit` (also during the
-        warmup); :meth:`load` resumes exactly, so ``partial_fit`` after ``load``
-        gives bit for bit what it would have given without stopping. Correlated
-        path: the fitted model. Both keep the report and the baseline of a
-        :meth:`fit`.
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            Destination file (no suffix added).
+        White path: the streaming state, at any point after the first :meth:`fit`
+        or :meth:`partial_fit` (also during the warmup), so that ``partial_fit``
+        after :meth:`load` gives bit for bit what it would have given without
+        stopping. Correlated path: the fitted model. Both keep the report and the
+        baseline of a :meth:`fit`.
         """
-        save(self, path)
+        return state_arrays(self._fitted_state("Call 'fit' or 'partial_fit' before saving it."))
 
     @classmethod
-    def load(cls, path: str | os.PathLike[str]) -> Self:
-        """Read an identifier written by :meth:`save`.
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            File written by :meth:`save`.
-
-        Returns
-        -------
-        HammersteinIdentifier
-            With the state it had when saved.
-        """
-        return load(cls, path)
+    def from_arrays(cls, data: Mapping[str, NDArray[Any]]) -> Self:
+        """The identifier :meth:`to_arrays` described (``data``: its output, or the arrays
+        of a file :meth:`save` wrote; files of format 1 load too), with the state it had."""
+        return cls.from_state(state_from_arrays(data))

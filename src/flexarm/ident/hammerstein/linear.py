@@ -23,13 +23,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..._validation import check_int, check_option, check_real
 from ...errors import InvalidValueError
-from .._estimator import HyperParameters, NotFittedError
+from .._estimator import Estimator, Fitted
 from .correlated.arx import StructureFit
 from .correlated.selection import Selection, final_fit, select_structure
-from .prediction import check_input, check_record, fit_percent, predict_output, r2_score
+from .prediction import Scored, check_input, check_record, predict_output
 from .systems import ARMA
 
-__all__ = ["MIN_SAMPLES", "LinearARX", "LinearModel", "linear_model"]
+__all__ = ["MIN_SAMPLES", "LinearARX", "LinearFit", "LinearModel", "baseline_fit", "linear_model"]
 
 F64 = NDArray[np.float64]
 _OWNER = "LinearARX"
@@ -77,7 +77,45 @@ def linear_model(fit: StructureFit) -> LinearModel:
     return LinearModel(arma, fit.offset, centre, fit.order, fit.estimator)
 
 
-class LinearARX(HyperParameters):
+@dataclass(frozen=True)
+class LinearFit(Fitted):
+    """What a fit of :class:`LinearARX` leaves.
+
+    Attributes
+    ----------
+    params : dict
+        The hyperparameters as the fit found them.
+    model : LinearModel
+        The fitted model.
+    selection : Selection or None
+        The orders tried and their held-out errors (None for a baseline loaded
+        with its identifier).
+    n_samples : int
+        Samples of the record.
+    n_lags : int
+        Length of the impulse response reported.
+    """
+
+    model: LinearModel
+    selection: Selection | None
+    n_samples: int
+    n_lags: int
+
+
+def baseline_fit(
+    u: F64, y: F64, selection: Selection, n_lags: int, params: dict[str, Any]
+) -> LinearFit:
+    """The linear choice of a held-out ``selection`` on the record ``(u, y)``, refitted
+    to the whole record: the state of a :class:`LinearARX` with hyperparameters ``params``.
+
+    :meth:`LinearARX.fit` makes the selection itself; the Hammerstein identifier's
+    correlated path passes the one it made (its linear candidates are the baseline's).
+    """
+    model = linear_model(final_fit(u, y, selection.linear))
+    return LinearFit(params, model, selection, int(u.shape[0]), n_lags)
+
+
+class LinearARX(Scored, Estimator[LinearFit]):
     """Linear ARX(l, l) model of ``u -> y``, order by held-out free-run error (module docstring).
 
     Parameters
@@ -108,6 +146,8 @@ class LinearARX(HyperParameters):
         ``"least squares"`` or ``"instrumental variables"``.
     selection_ : Selection
         The orders tried and their held-out errors.
+    state_ : LinearFit
+        The fitted state.
 
     Examples
     --------
@@ -118,6 +158,8 @@ class LinearARX(HyperParameters):
     >>> model.order_, np.round(model.arma_.a, 2), np.round(model.arma_.b, 2)
     (1, array([0.7]), array([1. , 0.5]))
     """
+
+    _not_fitted_hint = "Call 'fit' before using it."
 
     def __init__(
         self,
@@ -170,23 +212,26 @@ class LinearARX(HyperParameters):
                 f"The 'y' parameter of {_OWNER} must be explained by a stable linear model of "
                 "some order. Got no stable fit instead."
             )
-        self._fit(ua, ya, sel, p["n_lags"])
+        self._set_state(baseline_fit(ua, ya, sel, p["n_lags"], self._freeze()))
         return self
 
-    def _fit(self, u: F64, y: F64, sel: Selection, n_lags: int) -> None:
-        """Refit the selection's linear choice to the whole record (shared with the identifier)."""
-        self.model_ = linear_model(final_fit(u, y, sel.linear))
-        self.selection_ = sel
-        self.n_samples_ = int(u.shape[0])
-        self._n_lags = n_lags
-
     def _check_fitted(self) -> LinearModel:
-        model: LinearModel | None = self.__dict__.get("model_")
-        if model is None:
-            raise NotFittedError(
-                f"This {_OWNER} instance is not fitted yet. Call 'fit' before using it."
-            )
-        return model
+        return self._fitted_state().model
+
+    @property
+    def model_(self) -> LinearModel:
+        """The fitted model."""
+        return self._check_fitted()
+
+    @property
+    def selection_(self) -> Selection | None:
+        """The orders tried and their held-out errors (None after loading)."""
+        return self._fitted_state().selection
+
+    @property
+    def n_samples_(self) -> int:
+        """Samples of the record."""
+        return self._fitted_state().n_samples
 
     @property
     def order_(self) -> int:
@@ -216,7 +261,8 @@ class LinearARX(HyperParameters):
     @property
     def impulse_response_(self) -> F64:
         """The impulse response, shape (n_lags,) (units of ``y`` per unit of ``u``)."""
-        return self._check_fitted().arma.impulse_response(self._n_lags)
+        fit = self._fitted_state()
+        return fit.model.arma.impulse_response(fit.n_lags)
 
     def predict(
         self, u: ArrayLike, y: ArrayLike | None = None, steps_ahead: int | None = None
@@ -245,19 +291,6 @@ class LinearARX(HyperParameters):
         return predict_output(
             model.arma, ua - model.input_mean, model.offset, y, steps_ahead, owner=owner
         )
-
-    def score(self, u: ArrayLike, y: ArrayLike, steps_ahead: int | None = None) -> float:
-        """R² of :meth:`predict` on ``(u, y)`` (scikit-learn's ``score``; 1 is perfect).
-
-        With ``steps_ahead``, of the k-step prediction; otherwise of the free run from rest.
-        """
-        ua, ya = check_record(u, y, f"{_OWNER}.score", 1)
-        return r2_score(ya, self.predict(ua, ya if steps_ahead else None, steps_ahead))
-
-    def fit_percent(self, u: ArrayLike, y: ArrayLike, steps_ahead: int | None = None) -> float:
-        """Fit in percent, ``100 (1 - ||y - y_hat|| / ||y - mean y||)``, of :meth:`predict`."""
-        ua, ya = check_record(u, y, f"{_OWNER}.fit_percent", 1)
-        return fit_percent(ya, self.predict(ua, ya if steps_ahead else None, steps_ahead))
 
 
 def check_fraction(value: object, owner: str) -> float:

@@ -32,6 +32,7 @@ from ...errors import InvalidTypeError, InvalidValueError
 from .systems import ARMA
 
 __all__ = [
+    "Scored",
     "check_input",
     "check_record",
     "check_steps",
@@ -206,3 +207,34 @@ def r2_score(y: ArrayLike, y_hat: ArrayLike) -> float:
     """
     error, spread = _residuals(y, y_hat, "r2_score", lambda r: float(np.sum(r**2)))
     return 1.0 - error / spread
+
+
+class Scored:
+    """``score`` and ``fit_percent`` of an identified model, from its ``predict``."""
+
+    def predict(
+        self, u: ArrayLike, y: ArrayLike | None = None, steps_ahead: int | None = None
+    ) -> F64:
+        """The model's output for the input ``u`` (free run, or from the measured ``y``)."""
+        raise NotImplementedError  # pragma: no cover - every model defines it
+
+    def score(self, u: ArrayLike, y: ArrayLike, steps_ahead: int | None = None) -> float:
+        """R² of :meth:`predict` on ``(u, y)`` (scikit-learn's ``score``; 1 is perfect).
+
+        With ``steps_ahead``, of the k-step prediction; otherwise of the free run from rest.
+
+        Parameters
+        ----------
+        u, y : array_like, shape (n,)
+            Input and measured output (units of ``u`` and ``y``).
+        steps_ahead : int, optional
+            ``k >= 1``; None: the free run.
+        """
+        ua, ya = check_record(u, y, f"{type(self).__name__}.score")
+        return r2_score(ya, self.predict(ua, ya if steps_ahead else None, steps_ahead))
+
+    def fit_percent(self, u: ArrayLike, y: ArrayLike, steps_ahead: int | None = None) -> float:
+        """Fit in percent, ``100 (1 - ||y - y_hat|| / ||y - mean y||)``, of :meth:`predict`
+        (100 is perfect); the arguments as :meth:`score`'s."""
+        ua, ya = check_record(u, y, f"{type(self).__name__}.fit_percent")
+        return fit_percent(ya, self.predict(ua, ya if steps_ahead else None, steps_ahead))

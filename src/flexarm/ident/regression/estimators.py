@@ -47,13 +47,22 @@ per block on Dask's workers, combined in order on the client); both equal the
 in-memory fit bit for bit, in memory bounded by a few chunks outside exact
 mode (:mod:`flexarm.ident.regression.chunked`).
 
-:meth:`~SemiRecursiveKernelRegression.save` writes the hyperparameters and the
-accumulator's :meth:`~flexarm.ident.regression.accumulators.Accumulator.state` — one
-description, plain arrays (``flexarm.ident.regression._persist``) — to one ``.npz`` file;
+State and persistence
+---------------------
+A fit leaves one frozen value, :attr:`~SemiRecursiveKernelRegression.state_`
+(a :class:`RegressionState`: the hyperparameters the first fit froze and the
+mode's accumulator); ``partial_fit`` continues only while the hyperparameters
+keep those values, compared as values (arrays element by element, so that a
+change in place counts; the Hammerstein identifier follows the same rule).
+:meth:`~SemiRecursiveKernelRegression.to_arrays` describes it as plain arrays —
+the hyperparameters, then the accumulator's
+:meth:`~flexarm.ident.regression.accumulators.Accumulator.state` — and
+:meth:`~SemiRecursiveKernelRegression.save` writes them to one ``.npz`` file;
 :meth:`~SemiRecursiveKernelRegression.load` rebuilds the estimator and its
-accumulator from it (:meth:`~flexarm.ident.regression.accumulators.Accumulator.from_state`),
-and continuing with ``partial_fit`` gives bit for bit what never stopping
-would have given.
+accumulator from it
+(:meth:`~flexarm.ident.regression.accumulators.Accumulator.from_state`), and
+continuing with ``partial_fit`` gives bit for bit what never stopping would
+have given.
 
 Hyperparameter bounds
 ---------------------
@@ -69,19 +78,16 @@ Theorem 1, ``h_i -> 0`` and ``sum h_i**d = inf``, hold iff ``0 < decay <= 1/d``.
 
 from __future__ import annotations
 
-import copy
-import os
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any, ClassVar, Self
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..._io import atomic_path
 from ...errors import InvalidValueError
-from .._estimator import HyperParameters, NotFittedError, same_value
-from ._persist import estimator_state, hyperparameters
+from .._estimator import SavedEstimator
 from ._setup import check_X, check_Xy, smoothing
+from ._state import RegressionState, hyperparameters, state_arrays
 from .accumulators import Accumulator, BinnedSums, ExactSamples, GridAccumulator, State, choose
 from .bandwidth import Silverman
 from .chunked import fit_dask, fit_iterable, is_dask
@@ -89,8 +95,8 @@ from .kernels import KernelFunction
 
 __all__ = [
     "NadarayaWatson",
-    "NotFittedError",
     "RecursiveKernelRegression",
+    "RegressionState",
     "SemiRecursiveKernelRegression",
 ]
 
@@ -99,7 +105,7 @@ F64 = NDArray[np.float64]
 Bandwidth = float | ArrayLike | str | Silverman
 
 
-class _KernelRegression(HyperParameters):
+class _KernelRegression(SavedEstimator[RegressionState]):
     """Shared implementation; see the module docstring for the design."""
 
     _recursive: ClassVar[bool] = False
@@ -109,9 +115,21 @@ class _KernelRegression(HyperParameters):
     bandwidth: Bandwidth
     grid: ArrayLike | None
 
-    @property
-    def _owner(self) -> str:
-        return type(self).__name__
+    def __init__(
+        self,
+        kernel: str | KernelFunction = "gaussian",
+        bandwidth: Bandwidth = 1.0,
+        decay: float = 0.2,
+        grid: ArrayLike | None = None,
+        binned: float | None = None,
+        series: bool | str = "auto",
+    ) -> None:
+        self.kernel = kernel
+        self.bandwidth = bandwidth
+        self.decay = decay
+        self.grid = grid
+        self.binned = binned
+        self.series = series
 
     # ---------------------------------------------------------------- fitting
 
@@ -122,7 +140,7 @@ class _KernelRegression(HyperParameters):
         bandwidth: F64 | None = None,
         state: Mapping[str, NDArray[Any]] | None = None,
         source: str | None = None,
-    ) -> None:
+    ) -> Accumulator:
         """Validate the hyperparameters (on the first samples ``X``) and set up the state.
 
         To restore a saved estimator give ``d``, the resolved ``bandwidth`` and
@@ -139,21 +157,13 @@ class _KernelRegression(HyperParameters):
             bandwidth=bandwidth,
             source=source,
         )
-        self._frozen = {
-            k: copy.deepcopy(v) if isinstance(v, np.ndarray | list | tuple) else v
-            for k, v in self.get_params().items()
-        }
         kind = choose(setup)
-        self._acc: Accumulator = kind(setup) if state is None else kind.from_state(setup, state)
+        acc: Accumulator = kind(setup) if state is None else kind.from_state(setup, state)
+        self._set_state(RegressionState(params=self._freeze(), accumulator=acc))
+        return acc
 
     def _check_fitted(self) -> Accumulator:
-        acc: Accumulator | None = self.__dict__.get("_acc")
-        if acc is None:
-            raise NotFittedError(
-                f"This {self._owner} instance is not fitted yet. Call 'fit' or "
-                "'partial_fit' with appropriate arguments before using this estimator."
-            )
-        return acc
+        return self._fitted_state().accumulator
 
     def fit(self, X: ArrayLike, y: ArrayLike) -> Self:
         """Forget any previous state and fit to the samples.
@@ -174,12 +184,11 @@ class _KernelRegression(HyperParameters):
         -------
         self
         """
-        self.__dict__.pop("_acc", None)
+        self._forget()
         if is_dask(X) or is_dask(y):
             return self._guarded(lambda: fit_dask(self._begin, X, y, self._owner))
         Xa, ya = check_Xy(X, y, self._owner)
-        self._start(Xa)
-        self._acc.add_chunk(Xa, ya)
+        self._start(Xa).add_chunk(Xa, ya)
         return self
 
     def fit_chunks(self, chunks: Iterable[tuple[ArrayLike, ArrayLike]]) -> Self:
@@ -201,23 +210,21 @@ class _KernelRegression(HyperParameters):
         -------
         self
         """
-        self.__dict__.pop("_acc", None)
+        self._forget()
         return self._guarded(lambda: fit_iterable(self._begin, chunks, self._owner))
 
     def _begin(self, d: int, source: str) -> Accumulator:
         """The accumulator to continue (``partial_fit``), or a new one for ``d`` inputs."""
-        if "_acc" in self.__dict__:
-            self._check_continuation(d)
-        else:
-            self._start(d=d, source=source)
-        return self._acc
+        if self._is_fitted():
+            return self._continued(d)
+        return self._start(d=d, source=source)
 
     def _guarded(self, run: Callable[[], Accumulator]) -> Self:
         """Run a chunked fit; on an error the estimator is left unfitted."""
         try:
             run()
         except BaseException:
-            self.__dict__.pop("_acc", None)
+            self._forget()
             raise
         return self
 
@@ -246,28 +253,21 @@ class _KernelRegression(HyperParameters):
             fit_dask(self._begin, X, y, self._owner)
             return self
         Xa, ya = check_Xy(X, y, self._owner)
-        if "_acc" not in self.__dict__:
-            self._start(Xa)
-        else:
-            self._check_continuation(Xa.shape[1])
-        self._acc.add_chunk(Xa, ya)
+        acc = self._continued(Xa.shape[1]) if self._is_fitted() else self._start(Xa)
+        acc.add_chunk(Xa, ya)
         return self
 
-    def _check_continuation(self, d_new: int) -> None:
-        """``partial_fit`` after the first call: same ``d``, unchanged hyperparameters."""
-        d = self._acc.setup.d
+    def _continued(self, d_new: int) -> Accumulator:
+        """The accumulator ``partial_fit`` continues: same ``d``, unchanged hyperparameters."""
+        state = self._fitted_state()
+        d = state.accumulator.setup.d
         if d_new != d:
             raise InvalidValueError(
                 f"The 'X' parameter of {self._owner} must be of {d} column(s) as before. "
                 f"Got {d_new} instead."
             )
-        now = self.get_params()
-        changed = sorted(k for k in now if not same_value(now[k], self._frozen[k]))
-        if changed:
-            raise InvalidValueError(
-                f"The {changed} parameter(s) of {self._owner} changed since the first "
-                "partial_fit. Got new values instead; call fit to start again."
-            )
+        self._check_unchanged(state)
+        return state.accumulator
 
     # ---------------------------------------------------------------- fitted state
 
@@ -432,53 +432,21 @@ class _KernelRegression(HyperParameters):
 
     # ---------------------------------------------------------------- persistence
 
-    def _state(self) -> State:
-        """The one state description: hyperparameters, then the accumulator's state."""
-        return estimator_state(self._check_fitted(), self._owner, self._frozen)
+    def to_arrays(self) -> State:
+        """The hyperparameters, then the accumulator's state
+        (:mod:`flexarm.ident.regression.accumulators`), as plain arrays: what :meth:`save`
+        writes. A user-callable ``kernel`` cannot be written."""
+        return state_arrays(self._fitted_state(), self._owner)
 
     @classmethod
-    def _from_state(cls, data: Mapping[str, NDArray[Any]]) -> Self:
+    def from_arrays(cls, data: Mapping[str, NDArray[Any]]) -> Self:
+        """The estimator :meth:`to_arrays` described (``data``: its output, or the arrays of
+        a file :meth:`save` wrote), its accumulator resumed: continuing with
+        ``partial_fit`` gives bit for bit what never stopping would have given."""
         kwargs, d, h1 = hyperparameters(data, cls.__name__, cls._get_param_names())
         est = cls(**kwargs)
         est._start(d=d, bandwidth=h1, state=data)
         return est
-
-    def save(self, path: str | os.PathLike[str]) -> None:
-        """Write the hyperparameters and the streaming state to ``path`` (NumPy ``.npz``).
-
-        :meth:`load` then resumes exactly: ``partial_fit`` after ``load`` gives,
-        bit for bit, what it would have given without stopping. The file holds
-        plain arrays only (no pickle): the hyperparameters and the
-        accumulator's state (:mod:`flexarm.ident.regression.accumulators`); a
-        user-callable ``kernel`` cannot be saved.
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            Destination file, written as given (no suffix is added), atomically:
-            a temporary file beside it is renamed into place once complete.
-        """
-        arrays: dict[str, Any] = self._state()
-        with atomic_path(path) as tmp, open(tmp, "wb") as f:
-            np.savez(f, **arrays)
-
-    @classmethod
-    def load(cls, path: str | os.PathLike[str]) -> Self:
-        """Read an estimator written by :meth:`save` (of this same class).
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            File written by :meth:`save`.
-
-        Returns
-        -------
-        estimator
-            Fitted, with the state it had when saved.
-        """
-        with np.load(path, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-        return cls._from_state(data)
 
 
 class SemiRecursiveKernelRegression(_KernelRegression):
@@ -543,6 +511,8 @@ class SemiRecursiveKernelRegression(_KernelRegression):
     bin_error_ : float
         Binned mode: the bound ``E`` on the error of one weight (see
         :meth:`sum_error_bounds` and :meth:`error_bound`).
+    state_ : RegressionState
+        The fitted state: the frozen hyperparameters and the mode's accumulator.
 
     Examples
     --------
@@ -556,22 +526,6 @@ class SemiRecursiveKernelRegression(_KernelRegression):
     (1.0, True)
     """
 
-    def __init__(
-        self,
-        kernel: str | KernelFunction = "gaussian",
-        bandwidth: Bandwidth = 1.0,
-        decay: float = 0.2,
-        grid: ArrayLike | None = None,
-        binned: float | None = None,
-        series: bool | str = "auto",
-    ) -> None:
-        self.kernel = kernel
-        self.bandwidth = bandwidth
-        self.decay = decay
-        self.grid = grid
-        self.binned = binned
-        self.series = series
-
 
 class RecursiveKernelRegression(_KernelRegression):
     """Fully recursive (Devroye–Wagner) kernel regression estimate.
@@ -582,22 +536,6 @@ class RecursiveKernelRegression(_KernelRegression):
     """
 
     _recursive = True
-
-    def __init__(
-        self,
-        kernel: str | KernelFunction = "gaussian",
-        bandwidth: Bandwidth = 1.0,
-        decay: float = 0.2,
-        grid: ArrayLike | None = None,
-        binned: float | None = None,
-        series: bool | str = "auto",
-    ) -> None:
-        self.kernel = kernel
-        self.bandwidth = bandwidth
-        self.decay = decay
-        self.grid = grid
-        self.binned = binned
-        self.series = series
 
 
 class NadarayaWatson(_KernelRegression):

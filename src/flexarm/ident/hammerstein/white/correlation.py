@@ -1,12 +1,17 @@
 """The correlation approach: a Hammerstein system's parts from its lag regressions.
 
-Given the grid-mode sums of the lag regressions ``m_k(x) = E[Y_{n+k} | X_n = x]``,
-``k = 0 .. L-1`` (:class:`~flexarm.ident.HammersteinIdentifier` keeps them),
-:func:`solve` computes the impulse response (the instrument's covariances),
-the nonlinearity (the least-squares combination of the centred regressions,
-normalised by two known points or by the largest impulse-response entry) and
-the ARMA model (:func:`~flexarm.ident.hammerstein.white.arma.arma_from_impulse_response`). See
-:mod:`flexarm.ident.hammerstein.identifier` for the method.
+For every lag ``k = 0 .. L-1`` the lag regression ``m_k(x) = E[Y_{n+k} | X_n = x]``
+of a white input is ``lambda_k phi(x) + c_k``, so the centred regressions form a
+rank-one array. Given their grid-mode sums (:mod:`~flexarm.ident.hammerstein.white.lags`
+keeps them), :func:`solve` computes the impulse response — the covariance with
+an instrument (``"auto"``: the leading singular pair, which also serves an even
+``phi`` and a delayed linear part; ``"regression"``: ``m_0``, the paper's;
+``"input"``: ``x``) —, the shape of ``phi`` — their least-squares combination —,
+normalised by two known points (the paper's ``d1``, ``alpha``) or else with the
+impulse response's largest entry ``+1`` and ``phi`` of mean zero, and the ARMA
+model of the impulse response
+(:func:`~flexarm.ident.hammerstein.white.arma.arma_from_impulse_response`, order
+by BIC).
 """
 
 from __future__ import annotations

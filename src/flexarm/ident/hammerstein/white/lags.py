@@ -146,7 +146,7 @@ class LagRegressions:
             return state
         state.update(bandwidth_=np.array(self.bandwidth), grid=self.grid, tail=self.tail)
         for k, reg in enumerate(self.regressions):
-            state.update({f"lag{k}.{key}": v for key, v in reg._state().items()})
+            state.update({f"lag{k}.{key}": v for key, v in reg.to_arrays().items()})
         return state
 
     @classmethod
@@ -169,7 +169,7 @@ class LagRegressions:
         for k in range(params["n_lags"]):
             prefix = f"lag{k}."
             sub = {key[len(prefix) :]: v for key, v in state.items() if key.startswith(prefix)}
-            lags.regressions.append(SemiRecursiveKernelRegression._from_state(sub))
+            lags.regressions.append(SemiRecursiveKernelRegression.from_arrays(sub))
         return lags
 
 

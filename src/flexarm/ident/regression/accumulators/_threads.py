@@ -15,13 +15,14 @@ import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 
-__all__ = ["MIN_WORK", "run_split", "workers"]
+__all__ = ["MIN_WORK", "cores", "run_split", "workers"]
 
 #: Inner-loop iterations (kernel weights) below which a thread is not worth starting.
 MIN_WORK = 2**22
 
 
-def _cores() -> int:
+def cores() -> int:
+    """The cores this process may run on."""
     if hasattr(os, "sched_getaffinity"):
         return len(os.sched_getaffinity(0))
     return os.cpu_count() or 1  # pragma: no cover - not Linux
@@ -31,7 +32,7 @@ def workers(work: float, parts: int) -> int:
     """Threads for ``work`` kernel weights split into at most ``parts`` independent pieces."""
     if threading.current_thread() is not threading.main_thread():
         return 1
-    return max(1, min(_cores(), parts, int(work // MIN_WORK)))
+    return max(1, min(cores(), parts, int(work // MIN_WORK)))
 
 
 def run_split(n: int, threads: int, fn: Callable[[int, int], None]) -> None:

@@ -1,38 +1,62 @@
-"""The file layout of the kernel estimators' ``save``/``load`` (NumPy ``.npz``, no pickle).
+"""The fitted state of the kernel regression estimators, and its plain arrays.
 
-One description: the hyperparameters (``format``, ``estimator``, ``kernel``,
-``bandwidth`` — the value given, or a rule's value with ``bandwidth_rule`` and
-``bandwidth_factor`` — ``decay``, ``n_features_in``, ``series`` — the value
-given: ``True``, ``False`` or ``"auto"`` — and, where set, ``grid`` and
-``binned``), then the accumulator's
+:class:`RegressionState` is what a fit leaves: the hyperparameters it froze and the
+accumulator of the mode (:mod:`~flexarm.ident.regression.accumulators`), which keeps
+the validated :class:`~flexarm.ident.regression.accumulators.Smoothing` and the
+streaming sums. As plain arrays (``to_arrays``, the ``.npz`` file of ``save``, no
+pickle) it is one description: the hyperparameters (``format``, ``estimator``,
+``kernel``, ``bandwidth`` — the value given, or a rule's value with
+``bandwidth_rule`` and ``bandwidth_factor`` — ``decay``, ``n_features_in``,
+``series`` — the value given: ``True``, ``False`` or ``"auto"`` — and, where set,
+``grid`` and ``binned``), then the accumulator's
 :meth:`~flexarm.ident.regression.accumulators.Accumulator.state`.
 
-Format 2 holds the blocked sums (:mod:`~flexarm.ident.regression.accumulators.blocks`);
-format 1 files (before them) still load: exact and binned modes resume bit
-for bit; a grid or series state resumes with its sums as the total of complete
-blocks (agreeing with an uninterrupted fit to rounding), and series mode then
-evaluates by the series everywhere (format 1 has no band sums).
+Format 2 holds the blocked sums
+(:mod:`~flexarm.ident.regression.accumulators.blocks`); format 1 files (before
+them) still load: exact and binned modes resume bit for bit; a grid or series
+state resumes with its sums as the total of complete blocks (agreeing with an
+uninterrupted fit to rounding), and series mode then evaluates by the series
+everywhere (format 1 has no band sums).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import InvalidTypeError, InvalidValueError
+from .._estimator import Fitted
 from .accumulators import Accumulator, State
 from .bandwidth import Silverman, as_rule
 
-__all__ = ["FORMAT", "estimator_state", "hyperparameters"]
+__all__ = ["FORMAT", "RegressionState", "hyperparameters", "state_arrays"]
 
 FORMAT = 2  # version of the file layout (2: blocked sums; 1 still loads)
 
 
-def estimator_state(acc: Accumulator, owner: str, given: Mapping[str, Any]) -> State:
-    """The file's arrays: hyperparameters (``given``: as frozen at the first fit), then state."""
+@dataclass(frozen=True)
+class RegressionState(Fitted):
+    """What a fit of a kernel regression estimator leaves (module docstring).
+
+    Attributes
+    ----------
+    params : dict
+        The hyperparameters as the first fit found them.
+    accumulator : Accumulator
+        The mode's streaming state; ``accumulator.setup`` is the validated
+        :class:`~flexarm.ident.regression.accumulators.Smoothing`.
+    """
+
+    accumulator: Accumulator
+
+
+def state_arrays(fitted: RegressionState, owner: str) -> State:
+    """The file's arrays: the frozen hyperparameters, then the accumulator's state."""
+    acc, given = fitted.accumulator, fitted.params
     setup = acc.setup
     if not isinstance(setup.kernel, str):
         raise InvalidTypeError(
@@ -40,7 +64,7 @@ def estimator_state(acc: Accumulator, owner: str, given: Mapping[str, Any]) -> S
             f"estimator. Got {setup.kernel!r} instead."
         )
     rule = as_rule(given["bandwidth"], owner)
-    state: State = {
+    out: State = {
         "format": np.array(FORMAT),
         "estimator": np.array(owner),
         "kernel": np.array(setup.kernel),
@@ -54,13 +78,13 @@ def estimator_state(acc: Accumulator, owner: str, given: Mapping[str, Any]) -> S
         "series": np.array(given["series"]),
     }
     if rule is not None:
-        state.update(bandwidth_rule=np.array(rule.name), bandwidth_factor=np.array(rule.factor))
+        out.update(bandwidth_rule=np.array(rule.name), bandwidth_factor=np.array(rule.factor))
     if setup.grid is not None:
-        state["grid"] = setup.grid
+        out["grid"] = setup.grid
     if setup.binned is not None:
-        state["binned"] = np.array(setup.binned)
-    state.update(acc.state())
-    return state
+        out["binned"] = np.array(setup.binned)
+    out.update(acc.state())
+    return out
 
 
 def hyperparameters(
