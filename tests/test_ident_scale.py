@@ -28,26 +28,12 @@ from flexarm.ident.regression.accumulators import (
     ExactSamples,
     GridSums,
     SeriesMoments,
-    Smoothing,
     choose,
 )
 from flexarm.ident.regression.accumulators.blocks import segments
+from helpers.ident import fed, same_state, smoothing
 
 GRID = np.linspace(-0.1, 1.1, 23)[::-1]  # unsorted, partly outside the data
-
-
-def setup(kernel="epanechnikov", bw=(0.3,), decay=0.2, grid=None, block=16, **kw):
-    return Smoothing(
-        owner="test",
-        kernel=kernel,
-        code=KERNELS.index(kernel) if isinstance(kernel, str) else -1,
-        bandwidth=np.asarray(bw, dtype=np.float64),
-        decay=decay,
-        recursive=kw.pop("recursive", False),
-        grid=None if grid is None else np.asarray(grid, dtype=np.float64).reshape(len(grid), -1),
-        block=block,
-        **kw,
-    )
 
 
 def tri(u):
@@ -55,13 +41,15 @@ def tri(u):
 
 
 MODES = {
-    "grid": lambda b: setup("gaussian", (0.2,), 0.2, GRID, b),
-    "grid-callable": lambda b: setup(tri, (0.3,), 0.3, GRID, b),
-    "grid-2d": lambda b: setup("uniform", (0.4, 0.5), 0.2, np.c_[GRID, GRID[::-1]], b),
-    "grid-recursive": lambda b: setup("triangular", (0.3,), 0.25, GRID, b, recursive=True),
-    "series": lambda b: setup("gaussian", (0.05,), 0.0, GRID, b, series=True),
-    "exact": lambda b: setup("epanechnikov", (0.3,), 0.2, None, b),
-    "binned": lambda b: setup("gaussian", (0.2,), 0.2, GRID, b, binned=0.2),
+    "grid": lambda b: smoothing("gaussian", (0.2,), 0.2, GRID, block=b),
+    "grid-callable": lambda b: smoothing(tri, (0.3,), 0.3, GRID, block=b),
+    "grid-2d": lambda b: smoothing("uniform", (0.4, 0.5), 0.2, np.c_[GRID, GRID[::-1]], block=b),
+    "grid-recursive": lambda b: smoothing(
+        "triangular", (0.3,), 0.25, GRID, block=b, recursive=True
+    ),
+    "series": lambda b: smoothing("gaussian", (0.05,), 0.0, GRID, block=b, series=True),
+    "exact": lambda b: smoothing("epanechnikov", (0.3,), 0.2, None, block=b),
+    "binned": lambda b: smoothing("gaussian", (0.2,), 0.2, GRID, block=b, binned=0.2),
 }
 
 
@@ -69,20 +57,6 @@ def data(n, d=1, seed=0):
     rng = np.random.default_rng(seed)
     X = np.ascontiguousarray(rng.uniform(0, 1, (n, d)))
     return X, np.sin(2 * np.pi * X[:, 0]) - X[:, -1] + 0.2 * rng.standard_normal(n)
-
-
-def fed(acc, X, y, cuts=()):
-    for a, b in itertools.pairwise([0, *cuts, len(y)]):
-        if b > a:
-            acc.add_chunk(np.ascontiguousarray(X[a:b]), y[a:b])
-    return acc
-
-
-def same_state(a, b):
-    sa, sb = a.state(), b.state()
-    assert sa.keys() == sb.keys()
-    for k in sa:
-        np.testing.assert_array_equal(sa[k], sb[k], err_msg=k)
 
 
 def queries(s):
@@ -124,15 +98,17 @@ def test_exact_equals_grid_bitwise_across_block_boundaries(kernel, d):
     grid = GRID[:, None] if d == 1 else np.c_[GRID, GRID[::-1]]
     bw = (0.3, 0.4)[:d]
     for n in (64, 65, 700):  # a complete last block, one sample past it, many blocks
-        exact = fed(ExactSamples(setup(k, bw, 0.2, None, 64)), X[:n], y[:n])
-        on_grid = fed(GridSums(setup(k, bw, 0.2, grid, 64)), X[:n], y[:n], cuts=(3, 64, 200))
+        exact = fed(ExactSamples(smoothing(k, bw, 0.2, None, block=64)), X[:n], y[:n])
+        on_grid = fed(
+            GridSums(smoothing(k, bw, 0.2, grid, block=64)), X[:n], y[:n], cuts=(3, 64, 200)
+        )
         np.testing.assert_array_equal(exact.evaluate(grid), on_grid.evaluate(grid))
 
 
 def test_blocks_change_the_order_not_the_sums():
     X, y = data(3000, seed=4)
-    one = fed(GridSums(setup("gaussian", (0.2,), 0.2, GRID, 3000)), X, y).sums()
-    blocked = fed(GridSums(setup("gaussian", (0.2,), 0.2, GRID, 7)), X, y).sums()
+    one = fed(GridSums(smoothing("gaussian", (0.2,), 0.2, GRID, block=3000)), X, y).sums()
+    blocked = fed(GridSums(smoothing("gaussian", (0.2,), 0.2, GRID, block=7)), X, y).sums()
     for a, b in zip(one, blocked, strict=True):
         np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-13)
     assert list(segments(18, 3, 7)) == [(0, 3, True)]

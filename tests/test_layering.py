@@ -108,7 +108,7 @@ WITHIN: dict[str, list[str]] = {
     ],
     "fuzzy": ["sets", "compiled", "system", "paper"],
     "envs": ["config", "kernel", "core", "env", "vector"],
-    "ident": ["options", "_estimator", "data", "regression", "hammerstein", "fits"],
+    "ident": ["options", "_estimator", "_output", "data", "regression", "hammerstein", "fits"],
     "ident.regression": [
         "kernels",
         "bandwidth",

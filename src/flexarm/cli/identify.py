@@ -22,12 +22,12 @@ from typing import Any
 
 from ..ident.options import DISTRIBUTIONS, KERNELS, REGRESSION_FUNCTIONS
 from . import _hammerstein
-from ._common import UsageError, add_figure_options, figure_format
+from ._common import UsageError, add_figure_options
 from ._identify_common import (
     CommandParser,
-    check_out_option,
     given,
     library_errors,
+    output_options,
     parse_bandwidth,
     positive_int,
     report,
@@ -46,8 +46,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from ..ident.fits import fit_regression
 
     prog = f"{PROG} fit"
-    check_out_option(args, prog)
-    fmt = figure_format(args, prog, args.out)
+    fmt = output_options(args, prog)
     t0 = time.perf_counter()
     with library_errors(prog):
         x, y, dropped = read_xy(
@@ -108,8 +107,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
     from ..ident.regression.convergence import convergence_study, sample_sizes
 
     prog = f"{PROG} study"
-    check_out_option(args, prog)
-    fmt = figure_format(args, prog, args.out)
+    fmt = output_options(args, prog)
     t0 = time.perf_counter()
     with library_errors(prog):
         sizes = given(args, n_min="n_min", n_max="n_max", steps="n_steps")

@@ -54,10 +54,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..._io import atomic_path
 from ..._validation import check_array, check_int, check_option, check_real
 from ...errors import InvalidTypeError, InvalidValueError
-from ...figures import SINGLE_COLUMN, FigureFormat, new_figure, save_figure, style, styled
+from ...figures import SINGLE_COLUMN, FigureFormat, new_figure, styled
+from .._output import save_table_and_plot
 from ..options import DISTRIBUTIONS
 from .bandwidth import Silverman, as_rule
 from .estimators import SemiRecursiveKernelRegression
@@ -286,17 +286,9 @@ class ConvergenceResult:
         list of Path
             The files written.
         """
-        out = Path(directory)
-        out.mkdir(parents=True, exist_ok=True)
-        csv = out / "study.csv"
         header, table = self.table()
-        with atomic_path(csv) as tmp:
-            np.savetxt(tmp, table, fmt="%.10g", delimiter=",", header=",".join(header), comments="")
-        fig = new_figure(SINGLE_COLUMN, 2.8)
-        with style():  # the axes, its ticks and labels in the style too
-            ax = fig.add_subplot()
-        self.plot(ax)
-        return [csv, save_figure(fig, out / "study", figure_format)]
+        columns = (list(table.T), ",".join(header), "%.10g")
+        return save_table_and_plot(directory, "study", columns, self.plot, 2.8, figure_format)
 
 
 def _progress_bar(total: int, enabled: bool) -> Callable[[int], None]:

@@ -133,9 +133,7 @@ def exact_predict(
     for q in range(Q.shape[0]):
         num = 0.0
         den = 0.0
-        pn = 0.0
-        pd = 0.0
-        for a in range(0, n, block):
+        for a in range(0, n, block):  # each block's partial sums, added in order
             pn = 0.0
             pd = 0.0
             for i in range(a, min(n, a + block)):
@@ -143,13 +141,8 @@ def exact_predict(
                 if w != 0.0:
                     pn += w * y[i]
                     pd += w
-            if a + block <= n:  # a complete block
-                num += pn
-                den += pd
-                pn = 0.0
-                pd = 0.0
-        num += pn
-        den += pd
+            num += pn
+            den += pd
         out[q] = num / den if den != 0.0 else np.nan
     return out
 
@@ -162,11 +155,9 @@ def exact_predict_1d(
     out = np.empty(q.shape[0])
     n = x.shape[0]
     for m in range(q.shape[0]):
+        qm = q[m]
         num = 0.0
         den = 0.0
-        pn = 0.0
-        pd = 0.0
-        qm = q[m]
         for a in range(0, n, block):
             pn = 0.0
             pd = 0.0
@@ -175,13 +166,8 @@ def exact_predict_1d(
                 if w != 0.0:
                     pn += w * y[i]
                     pd += w
-            if a + block <= n:
-                num += pn
-                den += pd
-                pn = 0.0
-                pd = 0.0
-        num += pn
-        den += pd
+            num += pn
+            den += pd
         out[m] = num / den if den != 0.0 else np.nan
     return out
 
