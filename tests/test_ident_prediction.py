@@ -1,5 +1,5 @@
 """Prediction from data (initial conditions, k steps ahead), scores, the whiteness test, the
-linear baseline, persistence of the correlated path, and bad input (issues 16 and 17)."""
+linear baseline, persistence of the correlated path, and bad input."""
 
 from __future__ import annotations
 
