@@ -20,7 +20,7 @@ correlated path): ``u`` AR(1) noise with coefficient 0.9 scaled to about [-2, 2]
 ``HammersteinIdentifier().fit`` (whiteness test, order and knots chosen on held-out
 blocks, final fit, linear baseline, report); the same with the chosen order and
 knots given; and the ARX-Hammerstein fit of that structure alone
-(:func:`flexarm.ident.arx.fit_structure`: least squares and instrumental
+(:func:`flexarm.ident.hammerstein.correlated.arx.fit_structure`: least squares and instrumental
 variables). Peer, at ``--ham-n-peer`` samples: the over-parameterised least
 squares written as a dense regression matrix and solved by
 ``numpy.linalg.lstsq`` (Bai's first stage as usually coded), beside flexarm's
@@ -51,7 +51,7 @@ Streaming (target: ``--n`` = 10**6 samples onto the 512-point grid in <= 0.2 s o
     ``semi-recursive, binned r=0.1, fit`` (not the uniform kernel)
         The same estimate in the optional binned mode (``binned=0.1``: bins
         ``0.1 h`` wide, blocks of nearly equal ``h_i``; approximate, with the
-        bound of :mod:`flexarm.ident.binning`). Its largest deviation from the
+        bound of :mod:`flexarm.ident.regression.binning`). Its largest deviation from the
         exact estimate and its largest stated bound are printed beside it.
     ``Nadaraya-Watson, series, fit`` (gaussian only)
         ``NadarayaWatson(..., series=True)``: the one-bandwidth Gaussian by the
@@ -486,7 +486,7 @@ def dense_least_squares(u: np.ndarray, y: np.ndarray, order: int, knots: np.ndar
     then the rank-one separation; returns the free-run output."""
     from scipy.signal import lfilter
 
-    from flexarm.ident.hatbasis import evaluate, locate
+    from flexarm.ident.hammerstein.correlated.hatbasis import evaluate, locate
 
     n, k = u.shape[0], knots.shape[0]
     seg, pos = locate(u, knots)
@@ -509,7 +509,7 @@ def dense_least_squares(u: np.ndarray, y: np.ndarray, order: int, knots: np.ndar
 def bench_hammerstein(
     n: int, n_peer: int, repeat: int, log: Callable[[str], None]
 ) -> tuple[dict[str, Any], dict[str, float]]:
-    from flexarm.ident.arx import fit_structure
+    from flexarm.ident.hammerstein.correlated.arx import fit_structure
 
     u, y = hammerstein_data(max(n, n_peer), np.random.default_rng(SEED))
     res: dict[str, Any] = {}

@@ -101,7 +101,7 @@ def _reset_peak() -> None:
 
 def run_case(estimate: str, path: str, n: int, chunk: int) -> dict[str, Any]:
     """One fit of ``n`` samples (in this process); times, memory and the grid sums."""
-    import flexarm.ident.regression  # noqa: F401 - imports before the baseline RSS
+    import flexarm.ident.regression.estimators  # noqa: F401 - imports before the baseline RSS
 
     sizes = [chunk] * (n // chunk) + ([n % chunk] if n % chunk else [])
     warm = make_estimator(estimate).fit_chunks([chunk_data(0, 1000)])  # compile / load caches

@@ -11,7 +11,7 @@ import pytest
 import flexarm
 from flexarm.cli import main
 from flexarm.ident import HammersteinIdentifier, simulate_hammerstein
-from flexarm.ident.systems import Saturation
+from flexarm.ident.hammerstein.systems import Saturation
 from flexarm.studies.joint_identification import DriveNonlinearity
 
 

@@ -10,10 +10,11 @@ import json
 import numpy as np
 import pytest
 
-import flexarm.ident.convergence
 import flexarm.ident.fits
+import flexarm.ident.regression.convergence
 from flexarm.cli import main
 from flexarm.ident import SemiRecursiveKernelRegression
+from helpers.ident import files_fixture, samples_fixture  # noqa: F401 (the fixtures)
 
 N = 400
 FIT_FILES = {"estimate.csv", "estimate.png", "summary.json"}
@@ -53,35 +54,6 @@ def strict_json(text):
         raise ValueError(f"non-standard JSON constant {name}")
 
     return json.loads(text, parse_constant=refuse)
-
-
-@pytest.fixture(scope="module")
-def samples():
-    rng = np.random.default_rng(7)
-    x = rng.uniform(-1, 1, N)
-    y = np.clip(1.5 * x, -0.75, 0.75) + 0.05 * rng.standard_normal(N)
-    return x, y
-
-
-@pytest.fixture()
-def files(tmp_path, samples):
-    x, y = samples
-    t = np.arange(N)
-    csv = tmp_path / "d.csv"
-    lines = ["time,u,w"] + [
-        f"{a},{b!r},{c!r}" for a, b, c in zip(t, x.tolist(), y.tolist(), strict=True)
-    ]
-    csv.write_text("\n".join(lines) + "\n")
-    txt = tmp_path / "d.txt"
-    txt.write_text(
-        "# a comment line\n"
-        + "\n".join(f"{b!r}  {c!r}" for b, c in zip(x.tolist(), y.tolist(), strict=True))
-    )
-    npz = tmp_path / "d.npz"
-    np.savez(npz, u=x, w=y)
-    table = tmp_path / "t.npz"
-    np.savez(table, np.column_stack([t, x, y]))
-    return {"csv": csv, "txt": txt, "npz": npz, "table": table}
 
 
 # ------------------------------------------------------------------ fitting
@@ -320,7 +292,7 @@ def _bug(*args, **kwargs):
     [
         (flexarm.ident.fits, "fit_regression", ["fit", "{csv}"]),
         (flexarm.ident.fits, "fit_hammerstein", ["hammerstein", "{csv}"]),
-        (flexarm.ident.convergence, "convergence_study", ["study"]),
+        (flexarm.ident.regression.convergence, "convergence_study", ["study"]),
     ],
 )
 def test_a_plain_value_error_is_a_bug_not_exit_2(monkeypatch, files, module, name, argv):

@@ -96,8 +96,8 @@ def test_daisy_linear_part_and_free_run_fit():
 
 @needs_data
 def test_daisy_hammerstein_identifier_matches_the_arx_baseline():
-    """Issue 17's target: on the same split, the identifier's free-run fit is within
-    2 points of least-squares ARX with the order by BIC (this arm is nearly linear)."""
+    """On the same split, the identifier's free-run fit is within 2 points of
+    least-squares ARX with the order by BIC (this arm is nearly linear)."""
     u, y = ex.load_daisy(DATA)
     res = ex.identify(u, y)
     arx_fit = res["arx"][0]

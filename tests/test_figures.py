@@ -156,8 +156,8 @@ def test_regression_fit_draws_a_density_not_a_cloud(assert_readable, root):
 
 def test_hammerstein_fit_and_bands(assert_readable, root):
     from flexarm.ident import fit_hammerstein, simulate_hammerstein
-    from flexarm.ident.bootstrap import Bands
-    from flexarm.ident.systems import Saturation
+    from flexarm.ident.hammerstein.bootstrap import Bands
+    from flexarm.ident.hammerstein.systems import Saturation
 
     rng = np.random.default_rng(2)
     u = rng.uniform(-2, 2, 2500)

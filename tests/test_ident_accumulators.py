@@ -3,87 +3,34 @@ chunks against one call; ``state()``/``from_state()`` round trips for every mode
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import pytest
 
 from flexarm.ident import KERNELS, NadarayaWatson, SemiRecursiveKernelRegression
-from flexarm.ident.accumulators import (
+from flexarm.ident.regression.accumulators import (
     Accumulator,
     BinnedSums,
     ExactSamples,
     GridSums,
     SeriesMoments,
-    Smoothing,
     choose,
 )
-
-PROFILES = {
-    "gaussian": lambda u: np.exp(-(u**2) / 2),
-    "epanechnikov": lambda u: np.where(np.abs(u) <= 1, 0.75 * (1 - u**2), 0.0),
-    "uniform": lambda u: np.where(np.abs(u) <= 1, 0.5, 0.0),
-    "triangular": lambda u: np.where(np.abs(u) <= 1, 1 - np.abs(u), 0.0),
-}
-
-
-def sums14(q, X, y, bandwidth, decay, kernel, recursive=False):
-    """``N(q)``, ``D(q)`` of eq. 14 (or Devroye–Wagner weights) by NumPy, any ``d``."""
-    q = np.asarray(q, float).reshape(len(q), -1)
-    X = np.asarray(X, float).reshape(len(X), -1)
-    i = np.arange(1, len(X) + 1, dtype=float)
-    h = np.broadcast_to(np.asarray(bandwidth, float), (X.shape[1],))[None, :] * (
-        i[:, None] ** -decay
-    )
-    K = np.prod(PROFILES[kernel]((q[:, None, :] - X[None, :, :]) / h[None, :, :]), axis=2)
-    if recursive:
-        K = K / np.prod(h, axis=1)[None, :]
-    return K @ y, K.sum(axis=1)
-
-
-def eq14(*args, **kwargs):
-    num, den = sums14(*args, **kwargs)
-    out = np.full(num.shape, np.nan)
-    out[den > 0] = num[den > 0] / den[den > 0]
-    return out
-
-
-def setup(kernel="epanechnikov", bw=(0.3,), decay=0.2, recursive=False, grid=None, **kw):
-    return Smoothing(
-        owner="test",
-        kernel=kernel,
-        code=KERNELS.index(kernel),
-        bandwidth=np.asarray(bw, dtype=np.float64),
-        decay=decay,
-        recursive=recursive,
-        grid=None if grid is None else np.asarray(grid, dtype=np.float64).reshape(len(grid), -1),
-        **kw,
-    )
+from helpers.ident import eq14, fed, regression_data, same_state, smoothing, sums14
 
 
 def data(n, d=1, seed=0):
-    rng = np.random.default_rng(seed)
-    X = rng.uniform(0, 1, (n, d))
-    y = np.sin(2 * np.pi * X[:, 0]) + X[:, -1] ** 2 + 0.1 * rng.standard_normal(n)
-    return np.ascontiguousarray(X), y
-
-
-def fed(acc, X, y, cuts=()):
-    """``acc`` after the samples in chunks split at ``cuts``."""
-    edges = [0, *cuts, len(y)]
-    for a, b in itertools.pairwise(edges):
-        acc.add_chunk(np.ascontiguousarray(X[a:b]), y[a:b])
-    return acc
+    X, y = regression_data(n, d, seed)
+    return np.ascontiguousarray(X.reshape(n, -1)), y
 
 
 GRID1 = np.linspace(-0.2, 1.2, 41)[::-1]  # unsorted on purpose, partly outside the data
 
 
 def test_choose_picks_one_class_per_mode():
-    assert choose(setup()) is ExactSamples
-    assert choose(setup(grid=GRID1)) is GridSums
-    assert choose(setup(grid=GRID1, binned=0.1)) is BinnedSums
-    assert choose(setup("gaussian", decay=0.0, grid=GRID1, series=True)) is SeriesMoments
+    assert choose(smoothing()) is ExactSamples
+    assert choose(smoothing(grid=GRID1)) is GridSums
+    assert choose(smoothing(grid=GRID1, binned=0.1)) is BinnedSums
+    assert choose(smoothing("gaussian", decay=0.0, grid=GRID1, series=True)) is SeriesMoments
     for cls in (ExactSamples, GridSums, BinnedSums, SeriesMoments):
         assert issubclass(cls, Accumulator) and cls.mode in ("exact", "grid", "binned", "series")
 
@@ -95,8 +42,8 @@ def test_exact_equals_grid_bitwise_and_both_equal_eq14(kernel, recursive, d):
     X, y = data(300, d, seed=d)
     grid = GRID1[:, None] if d == 1 else np.random.default_rng(5).uniform(-0.2, 1.2, (30, 2))
     bw = [0.3, 0.5][:d]
-    exact = fed(ExactSamples(setup(kernel, bw, 0.2, recursive)), X, y)
-    on_grid = fed(GridSums(setup(kernel, bw, 0.2, recursive, grid=grid)), X, y)
+    exact = fed(ExactSamples(smoothing(kernel, bw, 0.2, recursive=recursive)), X, y)
+    on_grid = fed(GridSums(smoothing(kernel, bw, 0.2, grid, recursive=recursive)), X, y)
     m_exact, m_grid = exact.evaluate(grid), on_grid.evaluate(grid)
     np.testing.assert_array_equal(m_exact, m_grid)
     ref = eq14(grid, X, y, bw, 0.2, kernel, recursive=recursive)
@@ -113,9 +60,9 @@ def test_exact_equals_grid_bitwise_and_both_equal_eq14(kernel, recursive, d):
 def test_binned_is_within_its_bound_of_grid_sums(kernel, r):
     X, y = data(8000, seed=3)
     y = y + 1.0
-    s = setup(kernel, (0.2,), 0.2, grid=GRID1)
+    s = smoothing(kernel, (0.2,), 0.2, grid=GRID1)
     exact = fed(GridSums(s), X, y)
-    binned = fed(BinnedSums(setup(kernel, (0.2,), 0.2, grid=GRID1, binned=r)), X, y)
+    binned = fed(BinnedSums(smoothing(kernel, (0.2,), 0.2, grid=GRID1, binned=r)), X, y)
     N, D = exact.sums()
     Nb, Db = binned.sums()
     where = np.arange(len(GRID1))
@@ -129,8 +76,8 @@ def test_binned_is_within_its_bound_of_grid_sums(kernel, r):
 def test_series_equals_grid_sums_to_rounding(recursive):
     X, y = data(3000, seed=4)
     kw = {"kernel": "gaussian", "bw": (0.05,), "decay": 0.0, "recursive": recursive}
-    exact = fed(GridSums(setup(**kw, grid=GRID1)), X, y)
-    series = fed(SeriesMoments(setup(**kw, grid=GRID1, series=True)), X, y)
+    exact = fed(GridSums(smoothing(**kw, grid=GRID1)), X, y)
+    series = fed(SeriesMoments(smoothing(**kw, grid=GRID1, series=True)), X, y)
     ok = ~np.isnan(exact.evaluate(GRID1[:, None]))
     np.testing.assert_allclose(
         series.evaluate(GRID1[:, None])[ok], exact.evaluate(GRID1[:, None])[ok], rtol=1e-11
@@ -139,12 +86,12 @@ def test_series_equals_grid_sums_to_rounding(recursive):
 
 
 MODES = {
-    "exact": lambda: setup("triangular", (0.3,), 0.25),
-    "exact-2d": lambda: setup("gaussian", (0.3, 0.4), 0.2),
-    "grid": lambda: setup("uniform", (0.3,), 0.3, recursive=True, grid=GRID1),
-    "grid-2d": lambda: setup("epanechnikov", (0.4, 0.5), 0.2, grid=np.c_[GRID1, GRID1[::-1]]),
-    "binned": lambda: setup("gaussian", (0.2,), 0.2, grid=GRID1, binned=0.2),
-    "series": lambda: setup("gaussian", (0.05,), 0.0, grid=GRID1, series=True),
+    "exact": lambda: smoothing("triangular", (0.3,), 0.25),
+    "exact-2d": lambda: smoothing("gaussian", (0.3, 0.4), 0.2),
+    "grid": lambda: smoothing("uniform", (0.3,), 0.3, recursive=True, grid=GRID1),
+    "grid-2d": lambda: smoothing("epanechnikov", (0.4, 0.5), 0.2, grid=np.c_[GRID1, GRID1[::-1]]),
+    "binned": lambda: smoothing("gaussian", (0.2,), 0.2, grid=GRID1, binned=0.2),
+    "series": lambda: smoothing("gaussian", (0.05,), 0.0, grid=GRID1, series=True),
 }
 
 
@@ -160,8 +107,7 @@ def test_chunks_equal_one_call_bitwise(mode):
     parts = fed(choose(s)(s), X, y, cuts=(1, 2, 17, 999, 1000, 3001))
     assert parts.n_samples == whole.n_samples == 5000
     np.testing.assert_array_equal(parts.evaluate(queries(s)), whole.evaluate(queries(s)))
-    for k, v in whole.state().items():
-        np.testing.assert_array_equal(parts.state()[k], v, err_msg=k)
+    same_state(parts, whole)
 
 
 @pytest.mark.parametrize("mode", sorted(MODES))
@@ -199,7 +145,7 @@ def test_estimator_file_is_the_hyperparameters_plus_the_accumulator_state(tmp_pa
     est.save(tmp_path / "e.npz")
     with np.load(tmp_path / "e.npz", allow_pickle=False) as z:
         saved = {k: z[k] for k in z.files}
-    acc_state = est._acc.state()
+    acc_state = est.state_.accumulator.state()
     for k, v in acc_state.items():  # the accumulator's state, unchanged
         np.testing.assert_array_equal(saved[k], v, err_msg=k)
     header = set(saved) - set(acc_state)

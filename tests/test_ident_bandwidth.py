@@ -18,41 +18,24 @@ from flexarm.ident import (
     convergence_study,
     silverman_bandwidth,
 )
-from flexarm.ident.hammerstein import DEFAULT_BANDWIDTH
+from flexarm.ident.hammerstein.identifier import DEFAULT_BANDWIDTH
+from helpers.ident import saturation_samples, silverman
 
 N = 400
 
 
-def closed_form(x, n=None, factor=1.0, decay=0.2):
-    """Silverman (1986, eq. 3.31) per column, anchored at the last of n samples:
-    h_1 = factor 0.9 min(sd, IQR/1.34) n**(decay - 1/(d+4))."""
-    x = np.asarray(x, float).reshape(len(x), -1)
-    n = len(x) if n is None else n
-    d = x.shape[1]
-    out = []
-    for j in range(d):
-        col = x[:, j]
-        iqr = np.subtract(*np.percentile(col, [75, 25]))
-        s = min(col.std(ddof=1), iqr / 1.34)
-        out.append(factor * 0.9 * s * n ** (decay - 1 / (d + 4)))
-    return np.array(out)
-
-
 @pytest.fixture(scope="module")
 def samples():
-    rng = np.random.default_rng(7)
-    x = rng.uniform(-1, 1, N)
-    y = np.clip(1.5 * x, -0.75, 0.75) + 0.05 * rng.standard_normal(N)
-    return x, y
+    return saturation_samples(N)
 
 
 def test_default_bandwidth_is_silverman_at_the_last_sample(samples):
     x, _ = samples
     q75, q25 = np.percentile(x, [75, 25])
-    silverman = 0.9 * min(np.std(x, ddof=1), (q75 - q25) / 1.34) * N ** (-0.2)
+    rule = 0.9 * min(np.std(x, ddof=1), (q75 - q25) / 1.34) * N ** (-0.2)
     for decay in (0.0, 0.2, 0.5):
         h1 = silverman_bandwidth(x, decay)[0]
-        assert h1 * N ** (-decay) == pytest.approx(silverman, rel=1e-12)
+        assert h1 * N ** (-decay) == pytest.approx(rule, rel=1e-12)
 
 
 @pytest.mark.parametrize("factor", [1.0, 0.55, 3.0])
@@ -61,10 +44,10 @@ def test_rule_against_closed_form_in_two_dimensions(factor, decay):
     rng = np.random.default_rng(3)
     X = np.column_stack([rng.normal(0, 2, 500), rng.standard_t(2, 500)])  # heavy tail: IQR
     got = Silverman(factor)(X, decay)
-    np.testing.assert_allclose(got, closed_form(X, factor=factor, decay=decay), rtol=1e-12)
+    np.testing.assert_allclose(got, silverman(X, factor=factor, decay=decay), rtol=1e-12)
     np.testing.assert_allclose(
         silverman_bandwidth(X, decay, n=2000, factor=factor),
-        closed_form(X, n=2000, factor=factor, decay=decay),
+        silverman(X, n=2000, factor=factor, decay=decay),
         rtol=1e-12,
     )
 
@@ -108,7 +91,7 @@ def test_estimators_accept_the_rule(samples, cls, grid):
         **({} if cls is NadarayaWatson else {"decay": decay})
     )
     est.fit(x, y)
-    h1 = closed_form(x, decay=decay)
+    h1 = silverman(x, decay=decay)
     np.testing.assert_allclose(est.bandwidth_, h1, rtol=1e-12)
     same = cls(bandwidth=est.bandwidth_[0], grid=grid).set_params(
         **({} if cls is NadarayaWatson else {"decay": decay})
@@ -124,7 +107,7 @@ def test_estimators_accept_the_rule(samples, cls, grid):
 def test_rule_is_evaluated_on_the_first_partial_fit_and_saved(samples, tmp_path):
     x, y = samples
     est = SemiRecursiveKernelRegression(bandwidth=Silverman(0.7)).partial_fit(x[:100], y[:100])
-    np.testing.assert_allclose(est.bandwidth_, closed_form(x[:100], factor=0.7), rtol=1e-12)
+    np.testing.assert_allclose(est.bandwidth_, silverman(x[:100], factor=0.7), rtol=1e-12)
     est.save(tmp_path / "s.npz")
     back = SemiRecursiveKernelRegression.load(tmp_path / "s.npz")
     assert back.bandwidth == Silverman(0.7)
@@ -132,7 +115,7 @@ def test_rule_is_evaluated_on_the_first_partial_fit_and_saved(samples, tmp_path)
     for e in (est, back):
         e.partial_fit(x[100:], y[100:])  # the rule is not re-evaluated
     np.testing.assert_array_equal(back.predict(x[:9]), est.predict(x[:9]))
-    np.testing.assert_allclose(back.bandwidth_, closed_form(x[:100], factor=0.7), rtol=1e-12)
+    np.testing.assert_allclose(back.bandwidth_, silverman(x[:100], factor=0.7), rtol=1e-12)
 
 
 def test_hammerstein_default_is_the_rule_on_the_warmup_inputs():
@@ -142,10 +125,10 @@ def test_hammerstein_default_is_the_rule_on_the_warmup_inputs():
     assert Silverman(0.55) == DEFAULT_BANDWIDTH
     for decay in (0.2, 0.3):
         est = HammersteinIdentifier(decay=decay).fit(u, y)
-        expected = closed_form(u[:256], n=256, factor=0.55, decay=decay)[0]
+        expected = silverman(u[:256], n=256, factor=0.55, decay=decay)[0]
         assert est.bandwidth_ == pytest.approx(expected, rel=1e-12)
     est = HammersteinIdentifier(bandwidth="silverman").fit(u, y)
-    assert est.bandwidth_ == pytest.approx(closed_form(u[:256], n=256)[0], rel=1e-12)
+    assert est.bandwidth_ == pytest.approx(silverman(u[:256], n=256)[0], rel=1e-12)
 
 
 def test_study_default_is_the_rule_on_each_repetition():
@@ -155,7 +138,7 @@ def test_study_default_is_the_rule_on_each_repetition():
     for _ in range(3):
         X = rng.uniform(-1, 1, 200)
         rng.standard_normal(200)  # the noise drawn after the inputs
-        expected.append(closed_form(X, decay=0.2)[0])
+        expected.append(silverman(X, decay=0.2)[0])
     np.testing.assert_allclose(res.settings["h1"], expected, rtol=1e-12)
     assert res.settings["bandwidth"] == "silverman"
 
@@ -167,4 +150,4 @@ def test_cli_fit_uses_the_rule(samples, tmp_path, capsys):
     assert main(["identify", "fit", str(p), "--json", "--grid", "8"]) == 0
     s = json.loads(capsys.readouterr().out)
     assert s["bandwidth_rule"] == "silverman"
-    assert s["bandwidth"] == pytest.approx(closed_form(x)[0], rel=1e-12)
+    assert s["bandwidth"] == pytest.approx(silverman(x)[0], rel=1e-12)

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from flexarm.ident import ConvergenceResult, convergence_study
-from flexarm.ident.convergence import FUNCTIONS, regression_function
+from flexarm.ident.regression.convergence import FUNCTIONS, regression_function
+from helpers.ident import eq14, silverman
 
 NS = (250, 500, 1000, 2000, 4000, 8000)
 
@@ -37,10 +38,10 @@ def test_quantizer_converges_slower_than_smooth(smooth):
     assert q.mise[-1] < q.mise[0]
 
 
-def test_mise_matches_a_direct_computation():
-    """One repetition's ISE recomputed by hand: same draws, Silverman's h_1 for the last
-    sample, eq. 14 by NumPy, trapezoid."""
-    res = convergence_study("deadzone", n=[50, 120], repetitions=2, rng=11, grid=41)
+def direct_ises(h1_of):
+    """The deadzone study with n = 50, 120, 2 repetitions, seed 11, 41 points, by hand:
+    the same draws, eq. 14 by NumPy (Gaussian, decay 1/3), the trapezoid rule; ``h1_of(X)``
+    is the repetition's ``h_1``. Returns the ISE, shape (2 repetitions, 2 sizes)."""
     rng = np.random.default_rng(11)
     x = np.linspace(-0.5, 0.5, 41)
     m = FUNCTIONS["deadzone"][0]
@@ -48,17 +49,16 @@ def test_mise_matches_a_direct_computation():
     for _ in range(2):
         X = rng.uniform(-1, 1, 120)
         y = m(X) + 0.1 * rng.standard_normal(120)
-        q75, q25 = np.percentile(X, [75, 25])
-        h120 = 0.9 * min(np.std(X, ddof=1), (q75 - q25) / 1.34) * 120 ** (-1 / 5)  # Silverman
-        h1 = h120 * 120 ** (1 / 3)  # decay 1/3 (p = 1): h_120 is the rule's
-        row = []
-        for n in (50, 120):
-            h = h1 * np.arange(1, n + 1) ** (-1 / 3)
-            K = np.exp(-0.5 * ((x[:, None] - X[None, :n]) / h[None, :]) ** 2)
-            err = (K @ y[:n]) / K.sum(axis=1) - m(x)
-            row.append(np.trapezoid(err**2, x))
-        ises.append(row)
-    ises = np.array(ises)
+        h1 = h1_of(X)
+        errors = [eq14(x, X[:n], y[:n], h1, 1 / 3, "gaussian") - m(x) for n in (50, 120)]
+        ises.append([np.trapezoid(err**2, x) for err in errors])
+    return np.array(ises)
+
+
+def test_mise_matches_a_direct_computation():
+    """Silverman's h_1 for the last sample: h_120 is the rule's (decay 1/3, p = 1)."""
+    res = convergence_study("deadzone", n=[50, 120], repetitions=2, rng=11, grid=41)
+    ises = direct_ises(lambda X: silverman(X, decay=1 / 3)[0])
     np.testing.assert_allclose(res.mise, ises.mean(axis=0), rtol=1e-10)
     np.testing.assert_allclose(res.std, ises.std(axis=0, ddof=1), rtol=1e-8)
     assert res.settings["decay"] == pytest.approx(1 / 3)
@@ -68,21 +68,7 @@ def test_mise_matches_a_direct_computation():
 def test_fixed_bandwidth_matches_a_direct_computation():
     """A number fixes h_1 for every repetition (the study's earlier default, 0.3)."""
     res = convergence_study("deadzone", n=[50, 120], repetitions=2, rng=11, grid=41, bandwidth=0.3)
-    rng = np.random.default_rng(11)
-    x = np.linspace(-0.5, 0.5, 41)
-    m = FUNCTIONS["deadzone"][0]
-    ises = []
-    for _ in range(2):
-        X = rng.uniform(-1, 1, 120)
-        y = m(X) + 0.1 * rng.standard_normal(120)
-        row = []
-        for n in (50, 120):
-            h = 0.3 * np.arange(1, n + 1) ** (-1 / 3)
-            K = np.exp(-0.5 * ((x[:, None] - X[None, :n]) / h[None, :]) ** 2)
-            err = (K @ y[:n]) / K.sum(axis=1) - m(x)
-            row.append(np.trapezoid(err**2, x))
-        ises.append(row)
-    np.testing.assert_allclose(res.mise, np.mean(ises, axis=0), rtol=1e-10)
+    np.testing.assert_allclose(res.mise, direct_ises(lambda X: 0.3).mean(axis=0), rtol=1e-10)
     assert res.settings["bandwidth"] == 0.3 and res.settings["h1"] == [0.3, 0.3]
 
 

@@ -1,9 +1,9 @@
-"""Hammerstein identification for correlated inputs (issue 17) against the truth.
+"""Hammerstein identification for correlated inputs against the truth.
 
 Simulated Hammerstein systems in the paper's noise model (``W_n = phi(X_n) + xi_n``)
 driven by a sine sweep over 0.001-0.4 cycles/sample, a random-phase multisine
 and AR(1) noise with coefficient 0.9; the identifier chooses its path, order and
-knots from the data. Accuracy bars are issue 17's: phi within 0.06 after an
+knots from the data. The accuracy asked of it: phi within 0.06 after an
 affine fit for a saturation (0.1 for the others, the white path's own test bar
 in ``test_ident_hammerstein.py``) and an impulse-response cosine of at least 0.99.
 """

@@ -8,37 +8,7 @@ import pytest
 
 from flexarm.errors import InvalidValueError
 from flexarm.ident.data import DataError, load_columns, read_xy
-
-N = 400
-
-
-@pytest.fixture(scope="module")
-def samples():
-    rng = np.random.default_rng(7)
-    x = rng.uniform(-1, 1, N)
-    y = np.clip(1.5 * x, -0.75, 0.75) + 0.05 * rng.standard_normal(N)
-    return x, y
-
-
-@pytest.fixture()
-def files(tmp_path, samples):
-    x, y = samples
-    t = np.arange(N)
-    csv = tmp_path / "d.csv"
-    lines = ["time,u,w"] + [
-        f"{a},{b!r},{c!r}" for a, b, c in zip(t, x.tolist(), y.tolist(), strict=True)
-    ]
-    csv.write_text("\n".join(lines) + "\n")
-    txt = tmp_path / "d.txt"
-    txt.write_text(
-        "# a comment line\n"
-        + "\n".join(f"{b!r}  {c!r}" for b, c in zip(x.tolist(), y.tolist(), strict=True))
-    )
-    npz = tmp_path / "d.npz"
-    np.savez(npz, u=x, w=y)
-    table = tmp_path / "t.npz"
-    np.savez(table, np.column_stack([t, x, y]))
-    return {"csv": csv, "txt": txt, "npz": npz, "table": table}
+from helpers.ident import files_fixture, samples_fixture  # noqa: F401 (the fixtures)
 
 
 def test_load_columns_all_formats(files, samples):

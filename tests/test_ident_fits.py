@@ -21,7 +21,7 @@ from flexarm.ident import (
     fit_regression,
     simulate_hammerstein,
 )
-from flexarm.ident.systems import Saturation
+from flexarm.ident.hammerstein.systems import Saturation
 
 LABEL = re.compile(r"^\S.* \([^()]+\)$")  # "quantity (unit)"
 

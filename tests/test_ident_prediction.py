@@ -1,5 +1,5 @@
 """Prediction from data (initial conditions, k steps ahead), scores, the whiteness test, the
-linear baseline, persistence of the correlated path, and bad input (issues 16 and 17)."""
+linear baseline, persistence of the correlated path, and bad input."""
 
 from __future__ import annotations
 
@@ -22,9 +22,9 @@ from flexarm.ident import (
     simulate_hammerstein,
     whiteness_test,
 )
-from flexarm.ident.correlation import solve
-from flexarm.ident.prediction import predict_output
-from flexarm.ident.regression import SemiRecursiveKernelRegression
+from flexarm.ident.hammerstein.prediction import predict_output
+from flexarm.ident.hammerstein.white.correlation import solve
+from flexarm.ident.regression.estimators import SemiRecursiveKernelRegression
 
 
 def ar1(n, seed, c=0.9):

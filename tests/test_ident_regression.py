@@ -15,42 +15,9 @@ from flexarm.ident import (
     SemiRecursiveKernelRegression,
     evaluate_kernel,
 )
-from flexarm.ident.kernels import kernel_code, kernel_weight
-
-# Independent one-dimensional profiles, written out again here.
-PROFILES = {
-    "gaussian": lambda u: np.exp(-(u**2) / 2),
-    "epanechnikov": lambda u: np.where(np.abs(u) <= 1, 0.75 * (1 - u**2), 0.0),
-    "uniform": lambda u: np.where(np.abs(u) <= 1, 0.5, 0.0),
-    "triangular": lambda u: np.where(np.abs(u) <= 1, 1 - np.abs(u), 0.0),
-}
-
-
-def eq14(x, X, y, bandwidth, decay, kernel, recursive=False):
-    """Direct evaluation of eq. 14 (or the Devroye–Wagner weights) at the rows of ``x``."""
-    x = np.asarray(x, float).reshape(len(x), -1)
-    X = np.asarray(X, float).reshape(len(X), -1)
-    i = np.arange(1, len(X) + 1, dtype=float)
-    h = np.broadcast_to(np.asarray(bandwidth, float), (X.shape[1],))[None, :] * (
-        i[:, None] ** -decay
-    )
-    u = (x[:, None, :] - X[None, :, :]) / h[None, :, :]
-    K = np.prod(PROFILES[kernel](u), axis=2)
-    if recursive:
-        K = K / np.prod(h, axis=1)[None, :]
-    num, den = K @ y, K.sum(axis=1)
-    out = np.full(len(x), np.nan)
-    out[den > 0] = num[den > 0] / den[den > 0]
-    return out
-
-
-def data(n, d=1, seed=0):
-    rng = np.random.default_rng(seed)
-    X = rng.uniform(0, 1, (n, d)) if d > 1 else rng.uniform(0, 1, n)
-    Xm = X.reshape(n, -1)
-    y = np.sin(2 * np.pi * Xm[:, 0]) + Xm[:, -1] ** 2 + 0.1 * rng.standard_normal(n)
-    return X, y
-
+from flexarm.ident.regression.kernels import kernel_code, kernel_weight
+from helpers.ident import PROFILES, eq14, sums14
+from helpers.ident import regression_data as data
 
 # ----------------------------------------------------------------------------- kernels
 
@@ -387,9 +354,16 @@ def test_bad_input(params, X, y, exc, match):
         SemiRecursiveKernelRegression(**params).partial_fit(X, y)
 
 
-def test_decay_at_the_bound_is_allowed():
-    SemiRecursiveKernelRegression(decay=0.5, bandwidth=0.5).fit(X2, Y2)
-    SemiRecursiveKernelRegression(decay=1.0, bandwidth=0.5).fit(X1, Y1)
+@pytest.mark.parametrize(("decay", "X", "y"), [(0.5, X2, Y2), (1.0, X1, Y1)], ids=["d2", "d1"])
+def test_decay_at_the_bound_is_allowed(decay, X, y):
+    """``decay = 1/d`` is accepted, and the estimate is eq. 14 with that decay."""
+    est = SemiRecursiveKernelRegression(decay=decay, bandwidth=0.5).fit(X, y)
+    q = np.asarray(X)[::3]
+    np.testing.assert_allclose(est.predict(q), eq14(q, X, y, 0.5, decay, "gaussian"), rtol=1e-11)
+    h = 0.5 * np.arange(1, len(y) + 1) ** -decay
+    np.testing.assert_allclose(
+        est.bandwidths_, np.repeat(h[:, None], est.n_features_in_, 1), rtol=1e-14
+    )
 
 
 def test_bad_input_after_fit():
@@ -435,16 +409,6 @@ def test_decay_zero_equals_statsmodels_kernelreg():
 # ----------------------------------------------------------------------------- binned mode
 
 
-def direct_sums(x, X, y, bandwidth, decay, kernel, recursive=False):
-    """Exact ``N(x)``, ``D(x)`` with NumPy (the binned mode's reference)."""
-    i = np.arange(1, len(X) + 1, dtype=float)
-    h = bandwidth * i**-decay
-    K = PROFILES[kernel]((x[:, None] - X[None, :]) / h[None, :])
-    if recursive:
-        K = K / h[None, :]
-    return K @ y, K.sum(axis=1)
-
-
 BINNED_CLASSES = {
     "semi": (SemiRecursiveKernelRegression, {"decay": 0.2}, 0.2, False),
     "recursive": (RecursiveKernelRegression, {"decay": 0.25}, 0.25, True),
@@ -461,11 +425,11 @@ def test_binned_error_within_stated_bound(which, kernel, r):
     y = y + 1.5  # a mean far from 0: A and S both matter
     x = np.linspace(-0.2, 1.2, 97)
     est = cls(kernel, 0.3, grid=x, binned=r, **kw).fit(X, y)
-    N, D = direct_sums(x, X, y, 0.3, decay, kernel, recursive)
+    N, D = sums14(x, X, y, 0.3, decay, kernel, recursive)
     eN, eD = est.sum_error_bounds(x)
     # the oracle's own rounding (NumPy sums of n terms): n eps times the sum of |terms|
-    _, D_abs = direct_sums(x, X, y, 0.3, decay, kernel, recursive)
-    N_abs = direct_sums(x, X, np.abs(y), 0.3, decay, kernel, recursive)[0]
+    _, D_abs = sums14(x, X, y, 0.3, decay, kernel, recursive)
+    N_abs = sums14(x, X, np.abs(y), 0.3, decay, kernel, recursive)[0]
     oracle = len(X) * 2.0**-52
     dN = np.abs(est.numerator_ - N)
     dD = np.abs(est.denominator_ - D)
@@ -477,7 +441,7 @@ def test_binned_error_within_stated_bound(which, kernel, r):
     ok = np.isfinite(m) & np.isfinite(bound)
     assert ok.sum() > 60
     assert np.all(np.abs(est.predict(x)[ok] - m[ok]) <= bound[ok])
-    # the stated per-weight bound, recomputed from the formulas of flexarm.ident.binning
+    # the stated per-weight bound, recomputed from the formulas of flexarm.ident.regression.binning
     m1 = {"gaussian": 2 / np.e, "epanechnikov": 1.5, "triangular": 1.0}[kernel]
     interp = {"gaussian": r**2 / 8, "epanechnikov": 3 * r**2 / 16 + 3 * r / 8}.get(kernel, r / 2)
     tau = np.exp(-81 / (2 * (1 + r**2))) + 1e-12 if kernel == "gaussian" else 0.0
@@ -488,7 +452,7 @@ def test_binned_error_within_stated_bound(which, kernel, r):
 def test_binned_error_falls_with_the_bin_width():
     X, y = data(5000, seed=32)
     x = np.linspace(0, 1, 64)
-    N, D = direct_sums(x, X, y, 0.1, 0.0, "gaussian")
+    N, D = sums14(x, X, y, 0.1, 0.0, "gaussian")
     errors, bounds = [], []
     for r in (0.4, 0.2, 0.1, 0.05):
         est = NadarayaWatson("gaussian", 0.1, grid=x, binned=r).fit(X, y)
@@ -501,20 +465,27 @@ def test_binned_error_falls_with_the_bin_width():
     assert np.all(bounds_a[1:] < bounds_a[:-1] / 3.5), bounds_a
 
 
+def streamed_saved_resumed(cls, kw, X, y, cut, step, tmp_path):
+    """One fit; chunks of ``step`` up to ``cut``, saved, then the rest; and the same
+    loaded from the file, then the rest. Returns ``(whole, parts, resumed)``."""
+    whole = cls(**kw).fit(X, y)
+    parts = cls(**kw)
+    for s in range(0, cut, step):
+        parts.partial_fit(X[s : min(s + step, cut)], y[s : min(s + step, cut)])
+    parts.save(tmp_path / "est.npz")
+    resumed = cls.load(tmp_path / "est.npz")
+    for est in (parts, resumed):
+        est.partial_fit(X[cut:], y[cut:])
+    return whole, parts, resumed
+
+
 @pytest.mark.parametrize("cls", [SemiRecursiveKernelRegression, RecursiveKernelRegression])
 def test_binned_partial_fit_and_save_load_are_exact(tmp_path, cls):
     X, y = data(6000, seed=33)
     x = np.linspace(0, 1, 50)
     kw = {"kernel": "gaussian", "bandwidth": 0.2, "decay": 0.2, "grid": x, "binned": 0.2}
-    whole = cls(**kw).fit(X, y)
-    parts = cls(**kw)
-    for s in range(0, 4000, 777):
-        parts.partial_fit(X[s : min(s + 777, 4000)], y[s : min(s + 777, 4000)])
-    parts.save(tmp_path / "b.npz")
-    resumed = cls.load(tmp_path / "b.npz")
+    whole, parts, resumed = streamed_saved_resumed(cls, kw, X, y, 4000, 777, tmp_path)
     assert resumed.binned == 0.2
-    resumed.partial_fit(X[4000:], y[4000:])
-    parts.partial_fit(X[4000:], y[4000:])
     for est in (parts, resumed):
         np.testing.assert_array_equal(est.predict(x), whole.predict(x))
         np.testing.assert_array_equal(est.error_bound(x), whole.error_bound(x))
@@ -595,18 +566,12 @@ def test_series_partial_fit_and_save_load_are_exact(tmp_path):
     X, y = data(5000, seed=43)
     x = np.linspace(0, 1, 40)
     kw = {"kernel": "gaussian", "bandwidth": 0.03, "grid": x, "series": True}
-    whole = NadarayaWatson(**kw).fit(X, y)
-    parts = NadarayaWatson(**kw)
-    for s in range(0, 3000, 611):
-        parts.partial_fit(X[s : min(s + 611, 3000)], y[s : min(s + 611, 3000)])
-    parts.save(tmp_path / "s.npz")
-    resumed = NadarayaWatson.load(tmp_path / "s.npz")
+    whole, parts, resumed = streamed_saved_resumed(NadarayaWatson, kw, X, y, 3000, 611, tmp_path)
     assert resumed.series is True
     for est in (parts, resumed):
-        est.partial_fit(X[3000:], y[3000:])
         np.testing.assert_array_equal(est.predict(x), whole.predict(x))
         np.testing.assert_array_equal(est.denominator_, whole.denominator_)
-    N, D = direct_sums(x, X, y, 0.03, 0.0, "gaussian")
+    N, D = sums14(x, X, y, 0.03, 0.0, "gaussian")
     np.testing.assert_allclose(whole.numerator_, N, rtol=1e-11, atol=1e-9)
     np.testing.assert_allclose(whole.denominator_, D, rtol=1e-11)
 

@@ -23,31 +23,17 @@ from flexarm.ident import (
     RecursiveKernelRegression,
     SemiRecursiveKernelRegression,
 )
-from flexarm.ident.accumulators import (
+from flexarm.ident.regression.accumulators import (
     BLOCK,
     ExactSamples,
     GridSums,
     SeriesMoments,
-    Smoothing,
     choose,
 )
-from flexarm.ident.accumulators.blocks import segments
+from flexarm.ident.regression.accumulators.blocks import segments
+from helpers.ident import fed, same_state, smoothing
 
 GRID = np.linspace(-0.1, 1.1, 23)[::-1]  # unsorted, partly outside the data
-
-
-def setup(kernel="epanechnikov", bw=(0.3,), decay=0.2, grid=None, block=16, **kw):
-    return Smoothing(
-        owner="test",
-        kernel=kernel,
-        code=KERNELS.index(kernel) if isinstance(kernel, str) else -1,
-        bandwidth=np.asarray(bw, dtype=np.float64),
-        decay=decay,
-        recursive=kw.pop("recursive", False),
-        grid=None if grid is None else np.asarray(grid, dtype=np.float64).reshape(len(grid), -1),
-        block=block,
-        **kw,
-    )
 
 
 def tri(u):
@@ -55,13 +41,15 @@ def tri(u):
 
 
 MODES = {
-    "grid": lambda b: setup("gaussian", (0.2,), 0.2, GRID, b),
-    "grid-callable": lambda b: setup(tri, (0.3,), 0.3, GRID, b),
-    "grid-2d": lambda b: setup("uniform", (0.4, 0.5), 0.2, np.c_[GRID, GRID[::-1]], b),
-    "grid-recursive": lambda b: setup("triangular", (0.3,), 0.25, GRID, b, recursive=True),
-    "series": lambda b: setup("gaussian", (0.05,), 0.0, GRID, b, series=True),
-    "exact": lambda b: setup("epanechnikov", (0.3,), 0.2, None, b),
-    "binned": lambda b: setup("gaussian", (0.2,), 0.2, GRID, b, binned=0.2),
+    "grid": lambda b: smoothing("gaussian", (0.2,), 0.2, GRID, block=b),
+    "grid-callable": lambda b: smoothing(tri, (0.3,), 0.3, GRID, block=b),
+    "grid-2d": lambda b: smoothing("uniform", (0.4, 0.5), 0.2, np.c_[GRID, GRID[::-1]], block=b),
+    "grid-recursive": lambda b: smoothing(
+        "triangular", (0.3,), 0.25, GRID, block=b, recursive=True
+    ),
+    "series": lambda b: smoothing("gaussian", (0.05,), 0.0, GRID, block=b, series=True),
+    "exact": lambda b: smoothing("epanechnikov", (0.3,), 0.2, None, block=b),
+    "binned": lambda b: smoothing("gaussian", (0.2,), 0.2, GRID, block=b, binned=0.2),
 }
 
 
@@ -69,20 +57,6 @@ def data(n, d=1, seed=0):
     rng = np.random.default_rng(seed)
     X = np.ascontiguousarray(rng.uniform(0, 1, (n, d)))
     return X, np.sin(2 * np.pi * X[:, 0]) - X[:, -1] + 0.2 * rng.standard_normal(n)
-
-
-def fed(acc, X, y, cuts=()):
-    for a, b in itertools.pairwise([0, *cuts, len(y)]):
-        if b > a:
-            acc.add_chunk(np.ascontiguousarray(X[a:b]), y[a:b])
-    return acc
-
-
-def same_state(a, b):
-    sa, sb = a.state(), b.state()
-    assert sa.keys() == sb.keys()
-    for k in sa:
-        np.testing.assert_array_equal(sa[k], sb[k], err_msg=k)
 
 
 def queries(s):
@@ -124,15 +98,17 @@ def test_exact_equals_grid_bitwise_across_block_boundaries(kernel, d):
     grid = GRID[:, None] if d == 1 else np.c_[GRID, GRID[::-1]]
     bw = (0.3, 0.4)[:d]
     for n in (64, 65, 700):  # a complete last block, one sample past it, many blocks
-        exact = fed(ExactSamples(setup(k, bw, 0.2, None, 64)), X[:n], y[:n])
-        on_grid = fed(GridSums(setup(k, bw, 0.2, grid, 64)), X[:n], y[:n], cuts=(3, 64, 200))
+        exact = fed(ExactSamples(smoothing(k, bw, 0.2, None, block=64)), X[:n], y[:n])
+        on_grid = fed(
+            GridSums(smoothing(k, bw, 0.2, grid, block=64)), X[:n], y[:n], cuts=(3, 64, 200)
+        )
         np.testing.assert_array_equal(exact.evaluate(grid), on_grid.evaluate(grid))
 
 
 def test_blocks_change_the_order_not_the_sums():
     X, y = data(3000, seed=4)
-    one = fed(GridSums(setup("gaussian", (0.2,), 0.2, GRID, 3000)), X, y).sums()
-    blocked = fed(GridSums(setup("gaussian", (0.2,), 0.2, GRID, 7)), X, y).sums()
+    one = fed(GridSums(smoothing("gaussian", (0.2,), 0.2, GRID, block=3000)), X, y).sums()
+    blocked = fed(GridSums(smoothing("gaussian", (0.2,), 0.2, GRID, block=7)), X, y).sums()
     for a, b in zip(one, blocked, strict=True):
         np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-13)
     assert list(segments(18, 3, 7)) == [(0, 3, True)]
@@ -178,14 +154,14 @@ def make(mode):
 
 def check_same(a, b):
     np.testing.assert_array_equal(a.predict(X_Q), b.predict(X_Q))
-    same_state(a._acc, b._acc)
+    same_state(a.state_.accumulator, b.state_.accumulator)
 
 
 @pytest.mark.parametrize("mode", sorted(ESTIMATORS))
 def test_fit_chunks_and_partial_fit_equal_fit(big, mode):
     X, y = big
     whole = make(mode).fit(X, y)
-    assert type(whole._acc).mode == mode
+    assert type(whole.state_.accumulator).mode == mode
     sizes = [1, 999, BLOCK - 1000, 2, 12345, BLOCK, 10**9]
     edges = np.minimum(np.cumsum([0, *sizes]), N_BIG)
     chunks = [(X[a:b], y[a:b]) for a, b in itertools.pairwise(edges) if b > a]
@@ -221,7 +197,7 @@ def test_format_1_files_still_load(big, mode, tmp_path):
     X, y = big
     cut = BLOCK + 777
     est = make(mode).partial_fit(X[:cut], y[:cut])
-    state = est._state()
+    state = est.to_arrays()
     old = {k: v for k, v in state.items() if not k.startswith("open_") and k != "block"}
     old["format"] = np.array(1)
     old["series"] = np.array(mode == "series")  # format 1 stored a bool
@@ -254,7 +230,7 @@ def test_iterator_fit_in_bounded_memory():
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()
-    assert est.n_samples_ == n and isinstance(est._acc, SeriesMoments)
+    assert est.n_samples_ == n and isinstance(est.state_.accumulator, SeriesMoments)
     assert peak < 2 * 2**20, peak  # << 16 MB: a few chunks (160 kB each) and the state
     grid = np.linspace(0, 1, 64)[8:-8]  # away from the edges' bias
     assert np.max(np.abs(est.predict(grid) - np.sin(2 * np.pi * grid))) < 0.1
@@ -394,11 +370,11 @@ def test_auto_series_is_picked_where_documented(cls, kw, series):
     X, y = data(300, seed=11)
     est = cls(**{"bandwidth": 0.05, **kw}).fit(X[:, 0], y)
     assert est.series == kw.get("series", "auto")
-    assert est._acc.setup.series is series
+    assert est.state_.accumulator.setup.series is series
     if "grid" in kw:
-        assert isinstance(est._acc, SeriesMoments) is series
+        assert isinstance(est.state_.accumulator, SeriesMoments) is series
     two_d = NadarayaWatson(bandwidth=0.05).fit(*data(50, d=2))
-    assert two_d._acc.setup.series is False
+    assert two_d.state_.accumulator.setup.series is False
 
 
 def oracle(x, X, y, h):
@@ -437,7 +413,7 @@ def test_auto_series_agrees_with_direct_summation_to_1e12(case, gridded):
     X, y, h, x = adversarial(case, np.random.default_rng(CASES.index(case)))
     kw = {"grid": x} if gridded else {}
     auto = NadarayaWatson(bandwidth=h, **kw).fit(X, y)
-    assert auto._acc.setup.series  # the series is what is measured here
+    assert auto.state_.accumulator.setup.series  # the series is what is measured here
     direct = NadarayaWatson(bandwidth=h, series=False, **kw).fit(X, y).predict(x)
     got = auto.predict(x)
     N, D, A = oracle(x, X, y, h)
@@ -468,7 +444,7 @@ def test_series_bad_values(value, exc, match):
 
 
 def test_split_over_threads_changes_no_bit(monkeypatch):
-    from flexarm.ident.accumulators import _threads
+    from flexarm.ident.regression.accumulators import _threads
 
     X, y = data(3000, d=2, seed=12)
     grid2 = np.random.default_rng(13).uniform(0, 1, (40, 2))
@@ -481,5 +457,5 @@ def test_split_over_threads_changes_no_bit(monkeypatch):
             monkeypatch.setattr(_threads, "MIN_WORK", 2**62)
             serial = cls(**kw, grid=g).fit(XX, y).predict(q)
             monkeypatch.setattr(_threads, "MIN_WORK", 1)
-            assert _threads.workers(10**6, 40) == min(_threads._cores(), 40)
+            assert _threads.workers(10**6, 40) == min(_threads.cores(), 40)
             np.testing.assert_array_equal(cls(**kw, grid=g).fit(XX, y).predict(q), serial)

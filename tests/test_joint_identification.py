@@ -210,7 +210,7 @@ def test_settings_load_no_simulator():
 
 
 def test_designed_excitation_resolves_the_dead_band():
-    """Issue 17: the drive's +-2 N m dead band is not resolved by 60 s of uniform commands; an
+    """The drive's +-2 N m dead band is not resolved by 60 s of uniform commands; an
     excitation sized for it (design module) resolves it: both half-widths within half the
     dead band of the truth (the resolution the design asks for), and the RMS error within
     +-3 dead-band widths below a quarter of the dead band."""

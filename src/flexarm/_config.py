@@ -262,7 +262,7 @@ def split_key(key: str) -> tuple[str | int, ...]:
 
 
 def format_key(parts: tuple[str | int, ...]) -> str:
-    """The inverse of :func:`split_key`."""
+    """``("arm", "links", 1, "length")`` -> ``"arm.links[1].length"``."""
     text = ""
     for p in parts:
         text += f"[{p}]" if isinstance(p, int) else (f".{p}" if text else p)

@@ -19,41 +19,35 @@ from typing import Any
 
 from ..ident.options import METHODS, ORDER_RULES
 from ._common import UsageError, add_figure_options, figure_format
-from ._identify_common import check_out_option, given, library_errors, positive_int, report
+from ._identify_common import given, library_errors, output_options, positive_int, report
 
-__all__ = ["add_parser", "parse_knots", "parse_known", "parse_order"]
+__all__ = ["add_parser", "parse_knots", "parse_known", "parse_order", "word_or_int"]
 
 PROG = "flexarm identify hammerstein"
 
 
-def parse_order(text: str) -> int | str:
-    """``--order``: "auto", "bic", "aic" or a positive integer."""
-    if text in ORDER_RULES:
-        return text
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(
-            f"must be 'auto', 'bic', 'aic' or an integer >= 1. Got {text!r} instead."
-        )
-    return value
+def word_or_int(words: tuple[str, ...], minimum: int) -> Callable[[str], int | str]:
+    """An ``argparse`` type: one of ``words``, or an integer ``>= minimum``."""
+    expected = f"{', '.join(repr(w) for w in words)} or an integer >= {minimum}"
+
+    def parse(text: str) -> int | str:
+        if text in words:
+            return text
+        try:
+            value = int(text)
+        except ValueError:
+            value = minimum - 1
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"must be {expected}. Got {text!r} instead.")
+        return value
+
+    return parse
 
 
-def parse_knots(text: str) -> int | str:
-    """``--knots``: "auto" or an integer >= 2."""
-    if text == "auto":
-        return text
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 2:
-        raise argparse.ArgumentTypeError(
-            f"must be 'auto' or an integer >= 2. Got {text!r} instead."
-        )
-    return value
+#: ``--order``: "auto", "bic", "aic" or a positive integer.
+parse_order = word_or_int(ORDER_RULES, 1)
+#: ``--knots``: "auto" or an integer >= 2.
+parse_knots = word_or_int(("auto",), 2)
 
 
 def parse_known(text: str) -> tuple[tuple[float, float], tuple[float, float]]:
@@ -91,8 +85,7 @@ def _run(
             case = "applies to the robot experiment (hammerstein without DATA)"
         if wrong is not None:
             raise UsageError(f"{PROG}: error: argument {wrong}: {case}")
-        check_out_option(args, PROG)
-        figure_format(args, PROG, args.out)  # --format, --dpi: only with --out
+        output_options(args, PROG)  # before any work
         return _fit_data(args) if args.data is not None else _robot(args)
 
     return run
@@ -101,7 +94,7 @@ def _run(
 def _fit_data(args: argparse.Namespace) -> int:
     from ..ident.data import read_xy
     from ..ident.fits import fit_hammerstein
-    from ..ident.whiteness import IdentificationWarning
+    from ..ident.hammerstein.whiteness import IdentificationWarning
 
     t0 = time.perf_counter()
     columns = given(args, x="x", y="y")

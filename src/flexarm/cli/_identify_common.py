@@ -12,12 +12,14 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InvalidTypeError, InvalidValueError
+from ..figures import FigureFormat
 from ..ident.options import BANDWIDTH_RULES
 from ._common import (
     EXIT_FAILURE,
     Parser,
     UsageError,
     check_out,
+    figure_format,
     json_ready,
     number,
     output_directory,
@@ -26,9 +28,9 @@ from ._common import (
 
 __all__ = [
     "CommandParser",
-    "check_out_option",
     "given",
     "library_errors",
+    "output_options",
     "parse_bandwidth",
     "positive_int",
     "report",
@@ -121,7 +123,9 @@ def report(
     return 0
 
 
-def check_out_option(args: argparse.Namespace, prog: str) -> None:
-    """Refuse an ``--out`` that cannot take the results, before any work."""
+def output_options(args: argparse.Namespace, prog: str) -> FigureFormat:
+    """Refuse an ``--out`` that cannot take the results, before any work, and return the
+    figure format of ``--format`` and ``--dpi`` (which need ``--out``)."""
     if args.out is not None:
         check_out(Path(os.path.abspath(args.out)), prog)
+    return figure_format(args, prog, args.out)

@@ -22,12 +22,12 @@ from typing import Any
 
 from ..ident.options import DISTRIBUTIONS, KERNELS, REGRESSION_FUNCTIONS
 from . import _hammerstein
-from ._common import UsageError, add_figure_options, figure_format
+from ._common import UsageError, add_figure_options
 from ._identify_common import (
     CommandParser,
-    check_out_option,
     given,
     library_errors,
+    output_options,
     parse_bandwidth,
     positive_int,
     report,
@@ -46,8 +46,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from ..ident.fits import fit_regression
 
     prog = f"{PROG} fit"
-    check_out_option(args, prog)
-    fmt = figure_format(args, prog, args.out)
+    fmt = output_options(args, prog)
     t0 = time.perf_counter()
     with library_errors(prog):
         x, y, dropped = read_xy(
@@ -105,11 +104,10 @@ def _format_fit(summary: dict[str, Any]) -> str:
 def _cmd_study(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from ..ident.convergence import convergence_study, sample_sizes
+    from ..ident.regression.convergence import convergence_study, sample_sizes
 
     prog = f"{PROG} study"
-    check_out_option(args, prog)
-    fmt = figure_format(args, prog, args.out)
+    fmt = output_options(args, prog)
     t0 = time.perf_counter()
     with library_errors(prog):
         sizes = given(args, n_min="n_min", n_max="n_max", steps="n_steps")
@@ -194,13 +192,14 @@ and 'nan' are NaN: rows with NaN in the chosen columns are an error unless
 
 bandwidth: by default (silverman) h_1 is chosen so that the last sample's
 bandwidth h_n is Silverman's rule of thumb 0.9 min(sd, IQR/1.34) n^(-1/5) of the
-input column (flexarm.ident.bandwidth; with decay 0.2, h_1 = 0.9 min(sd, IQR/1.34)).
+input column (flexarm.ident.regression.bandwidth; with decay 0.2,
+h_1 = 0.9 min(sd, IQR/1.34)).
 
 --binned [R]: approximate grid mode with bins R h wide (default R = 0.1; R in
 [1e-4, 0.5]; gaussian, epanechnikov or triangular kernel; write --binned=R, or
 put DATA first, so that DATA is not taken for R); the summary reports the proven
-bound on its error (flexarm.ident.binning). --series (gaussian kernel, --decay 0):
-the same sums by a Taylor series (fast Gauss transform), O(n + N) instead of
+bound on its error (flexarm.ident.regression.binning). --series (gaussian kernel,
+--decay 0): the same sums by a Taylor series (fast Gauss transform), O(n + N) instead of
 O(n N) work, equal to the direct sums to rounding.
 
 output: with --out DIR (new or empty), DIR receives estimate.csv (x,m),

@@ -1,22 +1,27 @@
 """Nonparametric identification (paper §5): kernel regression and Hammerstein systems.
 
-* :mod:`~flexarm.ident.regression` — the estimators of ``E[Y | X = x]`` (eq. 14),
-  their streaming state in :mod:`~flexarm.ident.accumulators` (one per mode);
-* :mod:`~flexarm.ident.bandwidth` — the default-bandwidth rule (Silverman's);
+Two estimator families, each a subpackage:
+
+* :mod:`~flexarm.ident.regression` — the kernel regression estimates of
+  ``E[Y | X = x]`` (the paper's eq. 14): the estimators
+  (:mod:`~flexarm.ident.regression.estimators`), their streaming state
+  (:mod:`~flexarm.ident.regression.accumulators`, one per mode), the kernels,
+  the default-bandwidth rule (:mod:`~flexarm.ident.regression.bandwidth`,
+  Silverman's), linear binning and the Monte Carlo rate study
+  (:mod:`~flexarm.ident.regression.convergence`);
 * :mod:`~flexarm.ident.hammerstein` — Hammerstein identification for any
-  exciting input: the paper's correlation approach for a white input
-  (:mod:`~flexarm.ident.correlation`, :mod:`~flexarm.ident.lags`, ARMA fitting
-  in :mod:`~flexarm.ident.arma`), the ARX-Hammerstein path for a correlated one
-  (:mod:`~flexarm.ident.correlated`: :mod:`~flexarm.ident.hatbasis`,
-  :mod:`~flexarm.ident.arx`, :mod:`~flexarm.ident.selection`), the choice by
-  :mod:`~flexarm.ident.whiteness`, the linear baseline
-  :mod:`~flexarm.ident.linear`, predictions and scores in
-  :mod:`~flexarm.ident.prediction`, bootstrap bands in
-  :mod:`~flexarm.ident.bootstrap`, the fit's :mod:`~flexarm.ident.report`;
-  test systems in :mod:`~flexarm.ident.systems`;
-* :mod:`~flexarm.ident.convergence` — the Monte Carlo rate study;
-* :mod:`~flexarm.ident.data` — reading columns of data files;
-* :mod:`~flexarm.ident.fits` — one-call fits from data, with plots and files.
+  exciting input (:class:`~flexarm.ident.hammerstein.identifier.HammersteinIdentifier`):
+  the paper's correlation approach for a white input
+  (:mod:`~flexarm.ident.hammerstein.white`), the ARX-Hammerstein path for a
+  correlated one (:mod:`~flexarm.ident.hammerstein.correlated`), the choice by
+  :mod:`~flexarm.ident.hammerstein.whiteness`, the linear baseline, predictions
+  and scores, bootstrap bands, the fit's report, and the test systems
+  (:mod:`~flexarm.ident.hammerstein.systems`).
+
+What serves both stays here: the names of the choices
+(:mod:`~flexarm.ident.options`), reading columns of data files
+(:mod:`~flexarm.ident.data`) and the one-call fits with plots and files
+(:mod:`~flexarm.ident.fits`).
 
 Names load on first use (PEP 562): ``import flexarm.ident`` imports neither
 Numba nor SciPy; ``flexarm.ident.KERNELS`` and the data readers stay light,
@@ -29,69 +34,45 @@ from typing import TYPE_CHECKING
 
 from .._lazy import attach
 
-_SUBMODULES = (
-    "accumulators",
-    "arma",
-    "arx",
-    "bandwidth",
-    "binning",
-    "bootstrap",
-    "convergence",
-    "correlated",
-    "correlation",
-    "data",
-    "fits",
-    "hammerstein",
-    "hatbasis",
-    "kernels",
-    "lags",
-    "linear",
-    "options",
-    "prediction",
-    "regression",
-    "report",
-    "selection",
-    "systems",
-    "whiteness",
-)
+_SUBMODULES = ("data", "fits", "hammerstein", "options", "regression")
 _NAMES = {
+    # choices
     "KERNELS": "options",
     "BANDWIDTH_RULES": "options",
-    "Silverman": "bandwidth",
-    "silverman_bandwidth": "bandwidth",
-    "evaluate_kernel": "kernels",
-    "NadarayaWatson": "regression",
-    "NotFittedError": "regression",
-    "RecursiveKernelRegression": "regression",
-    "SemiRecursiveKernelRegression": "regression",
-    # Hammerstein systems and their identification (issue 7)
-    "ARMA": "systems",
-    "EXAMPLE_ARMA": "systems",
-    "Cubic": "systems",
-    "DeadZone": "systems",
-    "HardLimiter": "systems",
-    "PiecewiseLinear": "systems",
-    "Quantizer": "systems",
-    "Saturation": "systems",
-    "Sign": "systems",
-    "fit_percent": "systems",
-    "simulate_hammerstein": "systems",
-    "ARMAFit": "arma",
-    "arma_from_impulse_response": "arma",
-    "two_point_normalisation": "correlation",
-    "HammersteinIdentifier": "hammerstein",
-    # any exciting input (issue 17)
-    "Bands": "bootstrap",
-    "IdentificationReport": "report",
-    "IdentificationWarning": "whiteness",
-    "LinearARX": "linear",
-    "Selection": "selection",
-    "WhitenessReport": "whiteness",
-    "r2_score": "prediction",
-    "whiteness_test": "whiteness",
-    # Monte Carlo rate study (issue 6)
-    "ConvergenceResult": "convergence",
-    "convergence_study": "convergence",
+    # kernel regression
+    "Silverman": "regression.bandwidth",
+    "silverman_bandwidth": "regression.bandwidth",
+    "evaluate_kernel": "regression.kernels",
+    "NadarayaWatson": "regression.estimators",
+    "NotFittedError": "_estimator",
+    "RecursiveKernelRegression": "regression.estimators",
+    "SemiRecursiveKernelRegression": "regression.estimators",
+    "ConvergenceResult": "regression.convergence",
+    "convergence_study": "regression.convergence",
+    # Hammerstein systems and their identification, for any exciting input
+    "ARMA": "hammerstein.systems",
+    "EXAMPLE_ARMA": "hammerstein.systems",
+    "Cubic": "hammerstein.systems",
+    "DeadZone": "hammerstein.systems",
+    "HardLimiter": "hammerstein.systems",
+    "PiecewiseLinear": "hammerstein.systems",
+    "Quantizer": "hammerstein.systems",
+    "Saturation": "hammerstein.systems",
+    "Sign": "hammerstein.systems",
+    "simulate_hammerstein": "hammerstein.systems",
+    "ARMAFit": "hammerstein.solution",
+    "arma_from_impulse_response": "hammerstein.white.arma",
+    "two_point_normalisation": "hammerstein.solution",
+    "HammersteinIdentifier": "hammerstein.identifier",
+    "Bands": "hammerstein.bootstrap",
+    "IdentificationReport": "hammerstein.report",
+    "IdentificationWarning": "hammerstein.whiteness",
+    "LinearARX": "hammerstein.linear",
+    "Selection": "hammerstein.correlated.selection",
+    "WhitenessReport": "hammerstein.whiteness",
+    "fit_percent": "hammerstein.prediction",
+    "r2_score": "hammerstein.prediction",
+    "whiteness_test": "hammerstein.whiteness",
     # data files and one-call fits
     "DataError": "data",
     "load_columns": "data",
@@ -105,14 +86,7 @@ _NAMES = {
 __getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
 
 if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run time
-    from .arma import ARMAFit as ARMAFit
-    from .arma import arma_from_impulse_response as arma_from_impulse_response
-    from .bandwidth import Silverman as Silverman
-    from .bandwidth import silverman_bandwidth as silverman_bandwidth
-    from .bootstrap import Bands as Bands
-    from .convergence import ConvergenceResult as ConvergenceResult
-    from .convergence import convergence_study as convergence_study
-    from .correlation import two_point_normalisation as two_point_normalisation
+    from ._estimator import NotFittedError as NotFittedError
     from .data import DataError as DataError
     from .data import load_columns as load_columns
     from .data import read_xy as read_xy
@@ -120,29 +94,38 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run
     from .fits import RegressionFit as RegressionFit
     from .fits import fit_hammerstein as fit_hammerstein
     from .fits import fit_regression as fit_regression
-    from .hammerstein import HammersteinIdentifier as HammersteinIdentifier
-    from .kernels import evaluate_kernel as evaluate_kernel
-    from .linear import LinearARX as LinearARX
+    from .hammerstein.bootstrap import Bands as Bands
+    from .hammerstein.correlated.selection import Selection as Selection
+    from .hammerstein.identifier import HammersteinIdentifier as HammersteinIdentifier
+    from .hammerstein.linear import LinearARX as LinearARX
+    from .hammerstein.prediction import fit_percent as fit_percent
+    from .hammerstein.prediction import r2_score as r2_score
+    from .hammerstein.report import IdentificationReport as IdentificationReport
+    from .hammerstein.solution import ARMAFit as ARMAFit
+    from .hammerstein.solution import two_point_normalisation as two_point_normalisation
+    from .hammerstein.systems import ARMA as ARMA
+    from .hammerstein.systems import EXAMPLE_ARMA as EXAMPLE_ARMA
+    from .hammerstein.systems import Cubic as Cubic
+    from .hammerstein.systems import DeadZone as DeadZone
+    from .hammerstein.systems import HardLimiter as HardLimiter
+    from .hammerstein.systems import PiecewiseLinear as PiecewiseLinear
+    from .hammerstein.systems import Quantizer as Quantizer
+    from .hammerstein.systems import Saturation as Saturation
+    from .hammerstein.systems import Sign as Sign
+    from .hammerstein.systems import simulate_hammerstein as simulate_hammerstein
+    from .hammerstein.white.arma import arma_from_impulse_response as arma_from_impulse_response
+    from .hammerstein.whiteness import IdentificationWarning as IdentificationWarning
+    from .hammerstein.whiteness import WhitenessReport as WhitenessReport
+    from .hammerstein.whiteness import whiteness_test as whiteness_test
     from .options import BANDWIDTH_RULES as BANDWIDTH_RULES
     from .options import KERNELS as KERNELS
-    from .prediction import r2_score as r2_score
-    from .regression import NadarayaWatson as NadarayaWatson
-    from .regression import NotFittedError as NotFittedError
-    from .regression import RecursiveKernelRegression as RecursiveKernelRegression
-    from .regression import SemiRecursiveKernelRegression as SemiRecursiveKernelRegression
-    from .report import IdentificationReport as IdentificationReport
-    from .selection import Selection as Selection
-    from .systems import ARMA as ARMA
-    from .systems import EXAMPLE_ARMA as EXAMPLE_ARMA
-    from .systems import Cubic as Cubic
-    from .systems import DeadZone as DeadZone
-    from .systems import HardLimiter as HardLimiter
-    from .systems import PiecewiseLinear as PiecewiseLinear
-    from .systems import Quantizer as Quantizer
-    from .systems import Saturation as Saturation
-    from .systems import Sign as Sign
-    from .systems import fit_percent as fit_percent
-    from .systems import simulate_hammerstein as simulate_hammerstein
-    from .whiteness import IdentificationWarning as IdentificationWarning
-    from .whiteness import WhitenessReport as WhitenessReport
-    from .whiteness import whiteness_test as whiteness_test
+    from .regression.bandwidth import Silverman as Silverman
+    from .regression.bandwidth import silverman_bandwidth as silverman_bandwidth
+    from .regression.convergence import ConvergenceResult as ConvergenceResult
+    from .regression.convergence import convergence_study as convergence_study
+    from .regression.estimators import NadarayaWatson as NadarayaWatson
+    from .regression.estimators import RecursiveKernelRegression as RecursiveKernelRegression
+    from .regression.estimators import (
+        SemiRecursiveKernelRegression as SemiRecursiveKernelRegression,
+    )
+    from .regression.kernels import evaluate_kernel as evaluate_kernel

@@ -26,7 +26,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._budget import check_memory
-from .._io import atomic_path
 from .._validation import check_array, check_int
 from ..errors import InvalidValueError
 from ..figures import (
@@ -35,15 +34,15 @@ from ..figures import (
     FigureFormat,
     new_figure,
     save_figure,
-    style,
     styled,
 )
-from .bandwidth import Silverman, as_rule
-from .bootstrap import Bands
-from .correlation import KnownPoints
-from .hammerstein import DEFAULT_BANDWIDTH, HammersteinIdentifier
-from .kernels import KernelFunction
-from .regression import SemiRecursiveKernelRegression
+from ._output import output_directory, save_table_and_plot, write_csv
+from .hammerstein.bootstrap import Bands
+from .hammerstein.identifier import DEFAULT_BANDWIDTH, HammersteinIdentifier
+from .hammerstein.solution import KnownPoints
+from .regression.bandwidth import Silverman, as_rule
+from .regression.estimators import SemiRecursiveKernelRegression
+from .regression.kernels import KernelFunction
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -73,13 +72,6 @@ def _xy(x: ArrayLike, y: ArrayLike, owner: str, names: tuple[str, str]) -> tuple
             "Got a constant instead."
         )
     return np.asarray(xa, dtype=np.float64), np.asarray(ya, dtype=np.float64)
-
-
-def _write_csv(path: Path, columns: list[F64], header: str) -> None:
-    with atomic_path(path) as tmp:
-        np.savetxt(
-            tmp, np.column_stack(columns), fmt="%.12g", delimiter=",", header=header, comments=""
-        )
 
 
 @dataclass(frozen=True)
@@ -197,15 +189,8 @@ class RegressionFit:
         list of Path
             The files written.
         """
-        out = Path(directory)
-        out.mkdir(parents=True, exist_ok=True)
-        csv = out / "estimate.csv"
-        _write_csv(csv, [self.grid, self.estimate], "x,m")
-        fig = new_figure(SINGLE_COLUMN, 2.6)
-        with style():  # the axes, its ticks and labels in the style too
-            ax = fig.add_subplot()
-        self.plot(ax)
-        return [csv, save_figure(fig, out / "estimate", figure_format)]
+        table = ([self.grid, self.estimate], "x,m", "%.12g")
+        return save_table_and_plot(directory, "estimate", table, self.plot, 2.6, figure_format)
 
 
 def _draw_data(ax: Axes, x: F64, y: F64) -> None:
@@ -242,7 +227,7 @@ def fit_regression(
     kernel, bandwidth, decay, binned, series
         As :class:`~flexarm.ident.SemiRecursiveKernelRegression`; the default
         bandwidth is Silverman's rule for the last sample
-        (:mod:`flexarm.ident.bandwidth`).
+        (:mod:`flexarm.ident.regression.bandwidth`).
     grid : int, default 512
         Points of the grid, equispaced from ``min(x)`` to ``max(x)`` (>= 2).
     x_label, y_label : str
@@ -376,7 +361,7 @@ class HammersteinFit:
         -------
         matplotlib.figure.Figure
         """
-        from .bootstrap import draw_impulse_band, draw_phi_band
+        from .hammerstein.bootstrap import draw_impulse_band, draw_phi_band
 
         if fig is None:
             fig = new_figure(DOUBLE_COLUMN, 2.5)
@@ -438,22 +423,25 @@ class HammersteinFit:
         list of Path
             The files written (atomically each; the directory is created if needed).
         """
-        out = Path(directory)
-        out.mkdir(parents=True, exist_ok=True)
-        paths = [out / "nonlinearity.csv", out / "impulse_response.csv"]
+        out = output_directory(directory)
         ir = self.model.impulse_response_
         lags = np.arange(ir.shape[0], dtype=np.float64)
         b = self.bands
         if b is None:
-            _write_csv(paths[0], [self.grid, self.phi], "u,phi")
-            _write_csv(paths[1], [lags, ir], "lag,impulse_response")
+            phi = write_csv(out / "nonlinearity.csv", [self.grid, self.phi], "u,phi")
+            impulse = write_csv(out / "impulse_response.csv", [lags, ir], "lag,impulse_response")
         else:
-            _write_csv(paths[0], [b.grid, b.phi, b.phi_low, b.phi_high], "u,phi,phi_low,phi_high")
-            _write_csv(
-                paths[1], [lags, ir, b.impulse_low, b.impulse_high], "lag,impulse_response,low,high"
+            phi = write_csv(
+                out / "nonlinearity.csv",
+                [b.grid, b.phi, b.phi_low, b.phi_high],
+                "u,phi,phi_low,phi_high",
             )
-        paths.append(save_figure(self.plot(), out / "hammerstein", figure_format))
-        return paths
+            impulse = write_csv(
+                out / "impulse_response.csv",
+                [lags, ir, b.impulse_low, b.impulse_high],
+                "lag,impulse_response,low,high",
+            )
+        return [phi, impulse, save_figure(self.plot(), out / "hammerstein", figure_format)]
 
 
 def fit_hammerstein(

@@ -20,16 +20,16 @@ __all__ = [
 ]
 
 #: Names of the built-in kernels, in the order of their compiled codes
-#: (:mod:`flexarm.ident.kernels`).
+#: (:mod:`flexarm.ident.regression.kernels`).
 KERNELS: tuple[str, ...] = ("gaussian", "epanechnikov", "uniform", "triangular")
 
-#: Kernels that binned mode accepts: the continuous ones (:mod:`flexarm.ident.binning`).
+#: Kernels that binned mode accepts: the continuous ones (:mod:`flexarm.ident.regression.binning`).
 BINNABLE: tuple[str, ...] = ("gaussian", "epanechnikov", "triangular")
 
-#: Named bandwidth rules (:mod:`flexarm.ident.bandwidth`).
+#: Named bandwidth rules (:mod:`flexarm.ident.regression.bandwidth`).
 BANDWIDTH_RULES: tuple[str, ...] = ("silverman",)
 
-#: Information criteria that choose an ARMA order (:mod:`flexarm.ident.arma`).
+#: Information criteria that choose an ARMA order (:mod:`flexarm.ident.hammerstein.white.arma`).
 CRITERIA: tuple[str, ...] = ("bic", "aic")
 
 #: Order rules of :class:`~flexarm.ident.HammersteinIdentifier`: "auto" (BIC on the white
@@ -39,10 +39,12 @@ ORDER_RULES: tuple[str, ...] = ("auto", *CRITERIA)
 #: Identification paths of :class:`~flexarm.ident.HammersteinIdentifier`.
 METHODS: tuple[str, ...] = ("auto", "white", "correlated")
 
-#: Instruments of the Hammerstein correlation approach (:mod:`flexarm.ident.hammerstein`).
+#: Instruments of the Hammerstein correlation approach
+#: (:mod:`flexarm.ident.hammerstein.white.correlation`).
 INSTRUMENTS: tuple[str, ...] = ("auto", "regression", "input")
 
-#: Named regression functions of the convergence study (:mod:`flexarm.ident.convergence`).
+#: Named regression functions of the convergence study
+#: (:mod:`flexarm.ident.regression.convergence`).
 REGRESSION_FUNCTIONS: tuple[str, ...] = ("smooth", "deadzone", "saturation", "quantizer")
 
 #: Input distributions of the convergence study.

@@ -54,9 +54,9 @@ import numpy as np
 from ..._io import JSONValue
 from ..._validation import check_real, check_rng
 from ...errors import InvalidTypeError, InvalidValueError
-from ...ident._hammerstein_params import CORRELATED_MAX_ORDER
-from ...ident.hammerstein import HammersteinIdentifier
-from ...ident.whiteness import IdentificationWarning
+from ...ident.hammerstein._params import CORRELATED_MAX_ORDER
+from ...ident.hammerstein.identifier import HammersteinIdentifier
+from ...ident.hammerstein.whiteness import IdentificationWarning
 from ...model.arm import FlexibleArm
 from .experiment import joint_test_arm, measure, run_excitation
 from .parameters import JointExcitation, JointSensors

@@ -25,10 +25,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ...ident.bandwidth import Silverman
-from ...ident.hammerstein import HammersteinIdentifier, fit_percent
-from ...ident.regression import SemiRecursiveKernelRegression
-from ...ident.whiteness import IdentificationWarning
+from ...ident.hammerstein.identifier import HammersteinIdentifier
+from ...ident.hammerstein.prediction import fit_percent
+from ...ident.hammerstein.whiteness import IdentificationWarning
+from ...ident.regression.bandwidth import Silverman
+from ...ident.regression.estimators import SemiRecursiveKernelRegression
 from ...model.joints import LinearJoint, NonlinearJoint
 from .experiment import JointMeasurements, JointRecord
 from .parameters import DriveNonlinearity

@@ -17,12 +17,13 @@ from numpy.typing import NDArray
 
 from ..._io import JSONValue, atomic_path
 from ...figures import DOUBLE_COLUMN, FigureFormat, new_figure, save_figure, styled
+from ...ident._output import output_directory
 from .parameters import DriveNonlinearity
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from ...ident.hammerstein import HammersteinIdentifier
+    from ...ident.hammerstein.identifier import HammersteinIdentifier
 
 __all__ = ["SAVED_FILES", "CurveEstimate", "JointIdentification", "saved_files"]
 
@@ -176,8 +177,7 @@ class JointIdentification:
         list of Path
             The files written (:func:`saved_files`).
         """
-        out = Path(directory)
-        out.mkdir(parents=True, exist_ok=True)
+        out = output_directory(directory)
         paths = [out / name for name in SAVED_FILES[:-1]]
         with atomic_path(paths[0]) as tmp:
             tmp.write_text(json.dumps(self.summary(), indent=2) + "\n")

@@ -61,7 +61,7 @@ def identify_joint(
         ``|qd_m - qd|`` (0 < fraction <= 1).
     stiffness_bandwidth, friction_bandwidth : float
         Bandwidths of the kernel regressions as multiples ``c`` of Silverman's
-        rule (``Silverman(c)``, :mod:`flexarm.ident.bandwidth`: the one rule of
+        rule (``Silverman(c)``, :mod:`flexarm.ident.regression.bandwidth`: the one rule of
         flexarm's defaults), > 0. Narrow (about 1/45 and 1/18 of the rule), because
         the stiffness and friction curves have features (the soft windup, the
         Stribeck dip) much narrower than the regressors' spread.
