@@ -28,6 +28,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("control",),  # references, shapers, control laws, linear analysis
     ("sim",),  # the simulator, its results and metrics, scenario files
     ("sweeps",),  # grid and Monte Carlo sweeps of scenarios, on every core or a Dask cluster
+    ("calibration",),  # an arm's parameters fitted to measured runs
     # the paper's reproduction, the robot-joint identification study; Gymnasium environments
     ("studies", "envs"),
     ("cli",),  # the command line
@@ -47,6 +48,7 @@ WITHIN: dict[str, list[str]] = {
         "kernel_checks",
         "plant",
         "drives",
+        "damped_modes",
         "foreshortening",
         "packing",
         "kinematics",
@@ -115,6 +117,7 @@ WITHIN: dict[str, list[str]] = {
         "cluster",
         "driver",
     ],
+    "calibration": ["units", "records", "config", "model", "fit", "result"],
     "fuzzy": ["sets", "_kernels", "compiled", "system", "paper"],
     "envs": ["config", "step", "core", "env", "vector"],
     "ident": ["options", "_estimator", "_output", "data", "regression", "hammerstein", "fits"],

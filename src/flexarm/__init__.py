@@ -9,6 +9,8 @@ controllers, sensors, references -> results; data -> estimators):
 * :mod:`flexarm.sim` — the simulator, its results and metrics, scenario files;
 * :mod:`flexarm.fuzzy` — Mamdani fuzzy inference (the paper's adaptive law);
 * :mod:`flexarm.ident` — kernel regression and Hammerstein identification;
+* :mod:`flexarm.calibration` — an arm's parameters fitted to measured runs
+  (``flexarm.calibrate``);
 * :mod:`flexarm.sweeps` — grid and Monte Carlo sweeps over scenario parameters
   (``flexarm.sweep``), on every core or a Dask cluster;
 * :mod:`flexarm.studies` — the paper's reproduction and the robot-joint study;
@@ -29,6 +31,7 @@ from ._lazy import attach
 from ._version import __version__
 
 _SUBPACKAGES = (
+    "calibration",
     "cli",
     "control",
     "envs",
@@ -57,6 +60,7 @@ _NAMES = {
     "simulate_prescribed": "sim.prescribed",
     "SimulationSettings": "sim.settings",
     "sweep": "sweeps.driver",
+    "calibrate": "calibration.result",
 }
 
 __getattr__, __dir__, __all__ = attach(__name__, _SUBPACKAGES, _NAMES)
@@ -75,6 +79,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run
     )
     from .model.link import Link as Link
     from .model.modes import BeamModes as BeamModes
+    from .calibration.result import calibrate as calibrate
     from .sim.batch import simulate_many as simulate_many
     from .sim.closed_loop import simulate as simulate
     from .sim.open_loop import simulate_open_loop as simulate_open_loop

@@ -4,7 +4,7 @@ Where :mod:`flexarm.sensing.sensors` says what a controller sees inside the loop
 an instrument says what a rig's logger recorded: a channel computed from the
 states of a run (``q`` of shape (K, n_dof), at times ``t``), with its own pure
 delay (a logger's channels are often not aligned) and its own quantum. The
-calibration (``flexarm.calibrate``) compares these with measured channels.
+calibration (:mod:`flexarm.calibration`) compares these with measured channels.
 
 * :class:`Encoder` — a joint's encoder: the motor angle with flexible joints,
   else the joint angle (rad), rounded to its quantum (``2 pi / counts``).
