@@ -18,7 +18,7 @@ def run(capsys, *argv):
     return status, out, err
 
 
-COMMANDS = ("reproduce", "simulate", "sweep", "identify", "modes")  # api.md and issue 14
+COMMANDS = ("reproduce", "simulate", "sweep", "identify", "calibrate", "modes")  # the API contract
 
 
 def test_help_lists_every_command(capsys):

@@ -26,7 +26,7 @@ from typing import NoReturn
 
 from .._version import __version__
 from ..errors import InvalidTypeError, InvalidValueError
-from . import identify, modes, reproduce, simulate, sweep
+from . import calibrate, identify, modes, reproduce, simulate, sweep
 from ._common import (
     EXIT_INTERRUPTED,
     EXIT_PIPE,
@@ -52,7 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"flexarm {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
-    for command in (reproduce, simulate, sweep, identify, modes):
+    for command in (reproduce, simulate, sweep, identify, calibrate, modes):
         command.add_parser(sub)
     return parser
 
