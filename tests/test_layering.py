@@ -48,7 +48,6 @@ WITHIN: dict[str, list[str]] = {
         "kernel_checks",
         "plant",
         "drives",
-        "damped_modes",
         "foreshortening",
         "packing",
         "kinematics",
@@ -62,6 +61,7 @@ WITHIN: dict[str, list[str]] = {
         "backends",
         "prescribed",
         "arm",
+        "damped_modes",
     ],
     "sensing": ["delays", "sensors", "_channels", "channels", "instruments"],
     "control": [

@@ -67,6 +67,7 @@ __getattr__, __dir__, __all__ = attach(__name__, _SUBPACKAGES, _NAMES)
 __all__ += ["__version__"]
 
 if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run time
+    from .calibration.result import calibrate as calibrate
     from .model.arm import FlexibleArm as FlexibleArm
     from .model.joints import (
         LinearJoint as LinearJoint,
@@ -79,7 +80,6 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run
     )
     from .model.link import Link as Link
     from .model.modes import BeamModes as BeamModes
-    from .calibration.result import calibrate as calibrate
     from .sim.batch import simulate_many as simulate_many
     from .sim.closed_loop import simulate as simulate
     from .sim.open_loop import simulate_open_loop as simulate_open_loop

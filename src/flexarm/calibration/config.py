@@ -10,8 +10,10 @@ the same mapping (:meth:`CalibrationConfig.from_dict`)::
     substeps = 4               # RK4 steps per sample interval
     segment = 0.0              # s: cut records into segments this long, each
                                # started from the measured state (0: whole records)
-    initial_state = "rest"     # or "fit": each segment's first-mode deflection and
-                               # rate of every flexible link are fitted too
+    initial_state = "rest"     # each segment starts at the encoders' angles at rest;
+                               # "measured": with their measured rates; "fit": and
+                               # each flexible link's first-mode deflection and rate
+                               # fitted too
     smoothing = 1e-6           # spline penalty of prescribed angles (omit: chosen
                                # by cross-validation)
     interpolation = "linear"   # torques and currents between samples ("zoh")
@@ -93,7 +95,7 @@ OUTPUT_KINDS: dict[str, type] = {
     "tip_angle": TipAngle,
 }
 """Instrument kinds an output may be (:mod:`flexarm.sensing.instruments`)."""
-INITIAL_STATES = ("rest", "fit")
+INITIAL_STATES = ("rest", "measured", "fit")
 INTERPOLATIONS = ("zoh", "linear")
 ESTIMATE = "estimate"
 
@@ -199,8 +201,8 @@ class CalibrationConfig:
         settings = _settings(r, r.table(data, "calibration"))
         tables: dict[str, TomlValue] = {
             "arm": copy_value(r.table(data, "arm")),
-            "drives": copy_value(_drives(r, data.get("drives", []))),
-            "outputs": copy_value(_outputs(r, r.table(data, "outputs"))),
+            "drives": copy_value(list(_drives(r, data.get("drives", [])))),
+            "outputs": copy_value(dict(_outputs(r, r.table(data, "outputs")))),
         }
         parameters = _parameters(r, data.get("parameters"), tables, settings)
         records = _records(r, data.get("records"), tables)
@@ -311,6 +313,10 @@ def _parameters(
             r.fail(f"{key}.key", exc.reason)
         if parts[0] not in ("arm", "drives", "outputs"):
             r.fail(f"{key}.key", f"must start with arm, drives or outputs. Got {target!r} instead.")
+        try:
+            table_at(tables, parts, target, create=False)
+        except KeyPathError as exc:
+            r.fail(f"{key}.key", exc.reason)
         base = _get(tables, target)
         if base is None and parts[0] == "outputs" and parts[-1] == "delay":
             base = 0.0
@@ -331,7 +337,7 @@ def _parameters(
             r.fail(f"{key}.bounds", f"must be increasing, lower < upper. Got {bounds!r} instead.")
         default = 1.0 if scale else (float(base) if base is not None else None)
         if "initial" not in p and default is None:
-            r.fail(f"{key}.initial", f"is needed: the file sets no value at {target!r}")
+            default = 0.5 * (lo + hi)  # a key the file does not set: checked by the build
         initial = r.real(p["initial"], f"{key}.initial") if "initial" in p else float(default)  # type: ignore[arg-type]
         if not lo <= initial <= hi:
             r.fail(f"{key}.initial", f"must be within the bounds {bounds}. Got {initial} instead.")

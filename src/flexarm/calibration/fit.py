@@ -1,8 +1,8 @@
 """Fitting the parameters: least squares on the free-run prediction of the records.
 
-:func:`calibrate` reads the records, estimates the delays that are to be
-estimated (cross-correlation of the initial prediction with the measured
-channel), finds the parameters the training records cannot determine (holds them
+:func:`calibrate_records` (what :func:`flexarm.calibrate` runs) estimates the
+delays that are to be estimated (how much later a measured channel departs from its
+start than the initial prediction), finds the parameters the training records cannot determine (holds them
 at their initial values and says so), then fits the rest by bounded least squares
 (:func:`scipy.optimize.least_squares`, trust region reflective) on every training
 record's channels, each channel weighted by the inverse of its measured standard
@@ -189,7 +189,7 @@ class _Problem:
             zz = z.copy()
             zz[j] += steps[j]
             if j < n_free:
-                return (self.residual(zz) - base) / steps[j]
+                return np.asarray((self.residual(zz) - base) / steps[j], dtype=np.float64)
             c, which = n_free, 0
             while j >= c + self.n_nuisance[which]:
                 c += self.n_nuisance[which]
@@ -224,38 +224,44 @@ def _scales(params: Sequence[Parameter], values: F64) -> F64:
     )
 
 
+def _onset(t: F64, y: F64, fraction: float = 0.2) -> float | None:
+    """When ``y`` first departs from its start by ``fraction`` of its largest
+    departure (s), or None for a signal that does not move."""
+    start = float(np.mean(y[: max(1, y.shape[0] // 50)]))
+    departure = np.abs(y - start)
+    peak = float(np.max(departure))
+    if not np.isfinite(peak) or peak == 0.0:
+        return None
+    return float(t[int(np.argmax(departure >= fraction * peak))])
+
+
 def _estimate_delays(
     config: CalibrationConfig, predictor: Predictor, training: Sequence[int], values: F64
 ) -> F64:
-    """Initial values of the delays marked ``"estimate"``: the lag (0 to
-    ``max_delay``) that best correlates the undelayed prediction with the measured
-    channel over the training records."""
+    """Initial values of the delays marked ``"estimate"``: how much later the measured
+    channel departs from its start than the undelayed prediction does (the median
+    over the training records, within 0 to ``max_delay``). An onset is robust to a
+    model whose frequencies are still off, where a cross-correlation of oscillating
+    signals is not; the least squares then refines it."""
     values = values.copy()
     estimated = [(i, p) for i, p in enumerate(config.parameters) if p.estimate]
     if not estimated:
         return values
     plant = build_plant(config, values)
+    states = {k: predictor.states(plant, k) for k in training}
     for i, p in estimated:
         name = p.key.split(".")[1]
-        scores: dict[int, float] = {}
+        lags = []
         for k in training:
             rec = predictor.records[k]
             if name not in rec.outputs:
                 continue
-            q = predictor.states(plant, k)
-            raw = plant.outputs[name].raw(plant.arm, q)
-            y = rec.outputs[name] - rec.outputs[name].mean()
-            x = raw - raw.mean()
-            if not np.all(np.isfinite(x)):
-                continue
-            for lag in range(int(config.settings.max_delay / rec.dt) + 1):
-                if lag >= y.shape[0] - 2:
-                    break
-                score = float(np.dot(y[lag:], x[: x.shape[0] - lag]))
-                scores[lag] = scores.get(lag, 0.0) + score
-        if scores:
-            rec = predictor.records[training[0]]
-            values[i] = min(max(max(scores, key=scores.__getitem__) * rec.dt, p.lower), p.upper)
+            raw = plant.outputs[name].raw(plant.arm, states[k])
+            measured, predicted = _onset(rec.t, rec.outputs[name]), _onset(rec.t, raw)
+            if measured is not None and predicted is not None:
+                lags.append(measured - predicted)
+        if lags:
+            values[i] = min(max(float(np.median(lags)), p.lower), p.upper)
     return values
 
 

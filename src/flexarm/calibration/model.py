@@ -6,9 +6,10 @@ arm (the scenario schema's ``[arm]``), its drives and its instruments.
 prescribed (a smoothing spline, :func:`flexarm.sim.prescribed.motion_from_samples`),
 or the measured torques or currents (through the drives) driving the arm open loop
 (:func:`flexarm.simulate_open_loop`), and the instruments read from the run. A
-record may be cut into segments, each started from the measured state (the
-encoders' angles and rates; the links straight and at rest, or with a fitted
-first-mode deflection and rate): a long record then does not drift.
+record may be cut into segments, each started from the measured state: the
+encoders' angles, at rest (``initial_state = "rest"``) or with their measured rates
+(``"measured"``), the links straight and at rest, or with a fitted first-mode
+deflection and rate as well (``"fit"``): a long record then does not drift.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._config import TomlValue, copy_value, set_key
-from ..errors import CalibrationError, FlexarmError
+from ..errors import CalibrationError, ConfigFileError, FlexarmError
 from ..model.arm import FlexibleArm
 from ..model.drives import Drive
 from ..sensing.instruments import Encoder, Instrument, delayed
@@ -33,7 +34,7 @@ from ..sim.scenario import arm_from_tables
 from .config import OUTPUT_KINDS, CalibrationConfig
 from .records import Record
 
-__all__ = ["Plant", "Predictor", "build_plant"]
+__all__ = ["Plant", "Predictor", "build_plant", "check_plant"]
 
 F64 = NDArray[np.float64]
 
@@ -96,6 +97,33 @@ def build_plant(config: CalibrationConfig, values: Sequence[float] | F64 | None 
     return Plant(arm, drives, outputs)
 
 
+def check_plant(config: CalibrationConfig) -> Plant:
+    """The plant at the initial values, each parameter's key set: a key that names
+    nothing the arm, a drive or an instrument takes is refused by the parameter's
+    own key (``parameters[k].key``); any other refusal names the table.
+
+    Raises
+    ------
+    CalibrationError
+        Naming the key.
+    """
+    try:
+        return build_plant(config)
+    except ConfigFileError as exc:
+        last = None
+        for k, p in enumerate(config.parameters):
+            if exc.key is not None and exc.key.endswith(p.key.split(".")[-1]):
+                last = k
+        if last is None:
+            raise
+        key = config.parameters[last].key
+        raise CalibrationError(
+            config.source,
+            f"parameters[{last}].key",
+            f"{key!r} is not a parameter there: {exc.reason}",
+        ) from None
+
+
 def _with_rotors(arm: FlexibleArm, drives: Mapping[int, Drive]) -> FlexibleArm:
     if not any(d.rotor_inertia > 0 for d in drives.values()):
         return arm
@@ -118,6 +146,17 @@ def _first_mode_gain(arm: FlexibleArm, link: int) -> float:
     """``phi_1(L) / L``: the tip angle per unit of the link's first modal coordinate."""
     length = float(arm.link_lengths[link])
     return float(arm.modes[link].shape(np.array([length]))[0, 0]) / length
+
+
+def _quadratic_slope(t: F64, y: F64, i: int, half: int) -> float:
+    """The slope at sample ``i`` of the quadratic fitted by least squares to the samples
+    within ``half`` of it (a window of ``2 half + 1`` samples, shifted inwards at the
+    ends): a rate from noisy readings."""
+    n = t.shape[0]
+    width = min(2 * half + 1, n)
+    a = min(max(0, i - half), n - width)
+    _, slope, _ = np.polyfit(t[a : a + width] - t[i], y[a : a + width], 2)
+    return float(slope)
 
 
 class _CachedMotion:
@@ -150,8 +189,8 @@ class Predictor:
         s = config.settings
         self.segments: list[list[tuple[int, int]]] = []
         self.motions: list[_CachedMotion | None] = []
-        self.encoders: list[dict[int, tuple[F64, F64]]] = []
-        plant = build_plant(config)
+        self.encoders: list[dict[int, F64]] = []
+        plant = check_plant(config)
         for k, rec in enumerate(self.records):
             n = rec.t.shape[0]
             per = n if s.segment <= 0 else max(2, round(s.segment / rec.dt))
@@ -172,18 +211,13 @@ class Predictor:
                 self.motions.append(None)
             self.encoders.append(self._measured_joints(rec, plant))
 
-    def _measured_joints(self, rec: Record, plant: Plant) -> dict[int, tuple[F64, F64]]:
-        """Joint -> (angle, rate) from the record's encoder channels (a smoothing
-        spline's value and derivative at every sample), for segments' starts."""
-        found: dict[int, tuple[F64, F64]] = {}
-        for name, inst in plant.outputs.items():
-            if isinstance(inst, Encoder) and name in rec.outputs and inst.delay == 0.0:
-                motion = motion_from_samples(
-                    rec.t, rec.outputs[name], self.config.settings.smoothing
-                )
-                angle, rate, _ = motion(rec.t)
-                found[inst.joint] = (np.asarray(angle)[:, 0], np.asarray(rate)[:, 0])
-        return found
+    def _measured_joints(self, rec: Record, plant: Plant) -> dict[int, F64]:
+        """Joint -> its encoder's readings in the record (undelayed encoders only)."""
+        return {
+            inst.joint: rec.outputs[name]
+            for name, inst in plant.outputs.items()
+            if isinstance(inst, Encoder) and name in rec.outputs and inst.delay == 0.0
+        }
 
     def n_nuisance(self, plant: Plant, k: int) -> int:
         """Initial-state parameters of record ``k``: the first mode's deflection and
@@ -205,8 +239,10 @@ class Predictor:
                 th, dth, _ = motion.motion(rec.t[i0 : i0 + 1])
                 angle, rate = float(np.asarray(th)[0, j]), float(np.asarray(dth)[0, j])
             elif j in self.encoders[k]:
-                angle = float(self.encoders[k][j][0][i0])
-                rate = float(self.encoders[k][j][1][i0])
+                readings = self.encoders[k][j]
+                angle = float(readings[i0])
+                if self.config.settings.initial_state != "rest":
+                    rate = _quadratic_slope(rec.t, readings, i0, 10)
             x[j] = angle  # the link angle (equal to the motor's behind a flexible joint)
             x[n + j] = rate
             if arm.has_flexible_joints:

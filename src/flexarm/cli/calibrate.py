@@ -30,10 +30,10 @@ the file: [calibration] settings, the arm ([arm], the scenario file's tables), i
 key into those tables, bounds, an initial value, scale = true for a factor) and the
 [[records]] (a file and how its columns map to inputs and outputs, with units; role
 "training" or "validation"): the user guide's calibration page, or
-examples/quanser_2dsfl/*.toml.
+the files in examples/quanser_2dsfl.
 
 output: the fitted values with 95 % confidence intervals and each record's fit (fit % =
-100 (1 - |y - yhat| / |y - mean y|)) per channel, before and after. --json prints
+100 (1 - norm(y - yhat) / norm(y - mean y))) per channel, before and after. --json prints
 {"parameters": {name: {"value", "ci95", ...}}, "training": [...], "validation":
 [{"file", "channels": {name: {"fit_percent", "rms"}}}], ...}. --out DIR (new, or an
 empty directory) receives summary.json (what --json prints), calibrated.toml (the

@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_option
+from .arm import FlexibleArm
 
 __all__ = ["DampedModes", "damped_modes"]
 
@@ -60,7 +61,9 @@ class DampedModes(NamedTuple):
         return self.frequencies / (2 * np.pi)
 
 
-def damped_modes(arm: object, q: ArrayLike | None = None, joints: str = "locked") -> DampedModes:
+def damped_modes(
+    arm: FlexibleArm, q: ArrayLike | None = None, joints: str = "locked"
+) -> DampedModes:
     """The arm's modes with damping, linearised at rest about ``q`` (module docstring).
 
     Parameters
@@ -74,14 +77,14 @@ def damped_modes(arm: object, q: ArrayLike | None = None, joints: str = "locked"
     from scipy.linalg import eig
 
     check_option(joints, "joints", "damped_modes", ("locked", "free"))
-    n = arm.n_dof  # type: ignore[attr-defined]
+    n = arm.n_dof
     q0 = np.zeros(n) if q is None else np.asarray(q, dtype=float)
-    M = np.asarray(arm.mass_matrix(q0), dtype=float)  # type: ignore[attr-defined]
-    K = np.asarray(arm.stiffness_matrix, dtype=float)  # type: ignore[attr-defined]
-    D = np.asarray(arm.damping_matrix, dtype=float)  # type: ignore[attr-defined]
+    M = np.asarray(arm.mass_matrix(q0).real, dtype=np.float64)
+    K = np.asarray(arm.stiffness_matrix, dtype=np.float64)
+    D = np.asarray(arm.damping_matrix, dtype=np.float64)
     keep = np.ones(n, dtype=bool)
     if joints == "locked":
-        keep[arm.actuated_slice] = False  # type: ignore[attr-defined]
+        keep[arm.actuated_slice] = False
     M, K, D = (A[np.ix_(keep, keep)] for A in (M, K, D))
     m = M.shape[0]
     if m == 0:
