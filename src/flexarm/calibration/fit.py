@@ -2,8 +2,8 @@
 
 :func:`calibrate_records` (what :func:`flexarm.calibrate` runs) estimates the
 delays that are to be estimated (how much later a measured channel departs from its
-start than the initial prediction), finds the parameters the training records cannot determine (holds them
-at their initial values and says so), then fits the rest by bounded least squares
+start than the initial prediction), finds the parameters the training records
+cannot determine (holds them at their initial values and says so), then fits the rest by bounded least squares
 (:func:`scipy.optimize.least_squares`, trust region reflective) on every training
 record's channels, each channel weighted by the inverse of its measured standard
 deviation so that channels in different units count alike. The Jacobian is formed
