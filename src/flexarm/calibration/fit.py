@@ -1,24 +1,23 @@
 """Fitting the parameters: least squares on the free-run prediction of the records.
 
-:func:`calibrate_records` (what :func:`flexarm.calibrate` runs) estimates the
-delays that are to be estimated (how much later a measured channel departs from its
-start than the initial prediction), finds the parameters the training records
-cannot determine (holds them at their initial values and says so), then fits the rest by bounded least squares
-(:func:`scipy.optimize.least_squares`, trust region reflective) on every training
-record's channels, each channel weighted by the inverse of its measured standard
-deviation so that channels in different units count alike. The Jacobian is formed
-by forward differences, its columns run at once on a pool of threads (the
-simulator's compiled loops release the GIL). Seeded restarts from random points
-within the bounds guard against a local minimum. The result
+:func:`calibrate_records` (what :func:`flexarm.calibrate` runs) estimates the delays
+that are to be estimated (how much later a measured channel departs from its start
+than the initial prediction), finds the parameters the training records cannot
+determine (holds them at their initial values and says so), then fits the rest by
+bounded least squares (:func:`scipy.optimize.least_squares`, trust region
+reflective) on every training record's channels, each channel weighted by the
+inverse of its measured standard deviation so that channels in different units count
+alike. The Jacobian is formed by forward differences, its columns run at once on a
+pool of threads (the simulator's compiled loops release the GIL). Seeded restarts
+from random points within the bounds guard against a local minimum. The result
 (:class:`flexarm.calibration.result.Calibration`) carries the values with 95 %
 confidence intervals, their correlations, the fit of every record before and after.
 
-Confidence intervals are the usual ones of nonlinear least squares,
-``s^2 (J' J)^-1`` with ``s^2`` the residual variance: right when the residuals are
-white. Measured residuals are rarely white (the model leaves structure out); the
-result reports each channel's lag-one residual correlation and intervals widened
-by ``sqrt((1 + r) / (1 - r))``, the variance factor of an AR(1) residual.
-"""
+Confidence intervals are the usual ones of nonlinear least squares, ``s^2 (J'
+J)^-1`` with ``s^2`` the residual variance: right when the residuals are white.
+Measured residuals are rarely white (the model leaves structure out); the result
+reports each channel's lag-one residual correlation and intervals widened by
+``sqrt((1 + r) / (1 - r))``, the variance factor of an AR(1) residual."""
 
 from __future__ import annotations
 
