@@ -100,6 +100,7 @@ WITHIN: dict[str, list[str]] = {
         "scipy_loop",
         "closed_loop",
         "batch",
+        "step_check",
         "open_loop",
         "prescribed",
         "scenario_schema",

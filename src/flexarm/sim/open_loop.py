@@ -36,6 +36,7 @@ from ..model.plant import Plant, check_plant
 from . import _rk4
 from .chunks import DIVERGED, OK, run_in_chunks
 from .results import SimulationResult, assemble_result
+from .step_check import check_substeps
 
 __all__ = [
     "INTERPOLATIONS",
@@ -234,7 +235,7 @@ def simulate_open_loop(
     *,
     initial_state: ArrayLike | None = None,
     interpolation: str = "zoh",
-    substeps: int = 1,
+    substeps: int | str = "auto",
     max_deflection: float | None = None,
     progress: bool | None = None,
 ) -> SimulationResult:
@@ -258,8 +259,12 @@ def simulate_open_loop(
     interpolation : {"zoh", "linear"}
         For samples: held over each interval (zero-order hold) or linear
         between samples. Functions are evaluated exactly where needed.
-    substeps : int
-        RK4 steps per interval (>= 1).
+    substeps : int or "auto"
+        RK4 steps per interval (>= 1). An integer whose step is beyond the RK4
+        stability bound of the arm's dynamics linearised at the initial state is
+        refused, naming the substeps that work (:mod:`flexarm.sim.step_check`);
+        ``"auto"`` (default) takes 1 where one step is stable, else the fewest
+        within 90 % of the bound (the result's ``info["substeps"]`` says which).
     max_deflection : float, optional
         Tip deflection of any link (m) beyond which the run counts as diverged
         (default: that link's length).
@@ -290,15 +295,17 @@ def simulate_open_loop(
     arm = check_plant(arm, _OWNER)
     grid, dt = _time_grid(t)
     check_option(interpolation, "interpolation", _OWNER, INTERPOLATIONS)
-    substeps = check_int(substeps, "substeps", _OWNER, minimum=1)
+    if substeps != "auto":
+        substeps = check_int(substeps, "substeps", _OWNER, minimum=1)
     n, n_links = arm.n_dof, arm.n_links
-    mode, table, source, kind = _torque_source(torque, grid, substeps, n_links)
-    if mode < 0:
-        mode = _HOLD if interpolation == "zoh" else _LINEAR
     if initial_state is None:
         x0 = np.zeros(2 * n)
     else:
         x0 = check_array(initial_state, "initial_state", _OWNER, shape=(2 * n,))
+    substeps = check_substeps(arm, dt, substeps, _OWNER, x0[:n])
+    mode, table, source, kind = _torque_source(torque, grid, substeps, n_links)
+    if mode < 0:
+        mode = _HOLD if interpolation == "zoh" else _LINEAR
     if max_deflection is None:
         max_defl = np.array(arm.link_lengths, dtype=float)
     else:

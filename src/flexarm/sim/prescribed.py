@@ -31,6 +31,7 @@ from . import _rk4
 from .chunks import DIVERGED, OK
 from .open_loop import open_loop_result
 from .results import SimulationResult
+from .step_check import check_substeps
 
 __all__ = ["JointMotion", "motion_from_samples", "simulate_prescribed"]
 
@@ -222,7 +223,7 @@ def simulate_prescribed(
     motion: JointMotion | ArrayLike,
     *,
     initial_state: ArrayLike | None = None,
-    substeps: int = 1,
+    substeps: int | str = "auto",
     max_deflection: float | None = None,
 ) -> SimulationResult:
     """The arm's response when its actuated angles follow ``motion`` exactly.
@@ -246,8 +247,11 @@ def simulate_prescribed(
         ``(q, dq)`` at ``t[0]``; its actuated entries are replaced by the
         motion's. Default: straight links at rest (and, with flexible joints,
         link angles equal to the motor angles).
-    substeps : int
-        RK4 steps per interval (>= 1).
+    substeps : int or "auto"
+        RK4 steps per interval (>= 1), checked against the RK4 stability bound of
+        the free coordinates' dynamics linearised at rest (refused beyond it, naming
+        the substeps that work); ``"auto"`` (default) takes 1 where one step is
+        stable, else the fewest within 90 % of the bound.
     max_deflection : float, optional
         Tip deflection of any link (m) beyond which the run counts as diverged
         (default: that link's length).
@@ -285,8 +289,13 @@ def simulate_prescribed(
             f"The 't' parameter of {_OWNER} must be increasing and evenly spaced. "
             f"Got steps from {np.diff(grid).min():.6g} to {np.diff(grid).max():.6g} s instead."
         )
-    substeps = check_int(substeps, "substeps", _OWNER, minimum=1)
+    if substeps != "auto":
+        substeps = check_int(substeps, "substeps", _OWNER, minimum=1)
     n, n_links = arm.n_dof, arm.n_links
+    free = np.ones(n, dtype=bool)
+    actuated = getattr(arm, "actuated_slice", slice(0, n_links))
+    free[actuated] = False  # the actuated angles follow the motion
+    substeps = check_substeps(arm, dt, substeps, _OWNER, None, free)
     source = motion
     if isinstance(motion, np.ndarray | list | tuple):  # measured angles: a spline through them
         source = motion_from_samples(grid, motion)

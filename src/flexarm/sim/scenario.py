@@ -293,15 +293,38 @@ def _arm(r: ScenarioReader, data: Mapping[str, Any]) -> tuple[FlexibleArm, dict[
 
 def _joints(
     r: ScenarioReader, arm_table: Mapping[str, Any], n_links: int
-) -> tuple[list[LinearJoint | NonlinearJoint] | None, dict[str, Any]]:
-    t = r.table(arm_table, "joints", "arm.")
+) -> tuple[list[LinearJoint | NonlinearJoint] | None, dict[str, Any] | list[dict[str, Any]]]:
+    """``[arm.joints]`` (the same joint at every link) or ``[[arm.joints]]`` (one table
+    per joint, base outwards; all rigid or none)."""
+    value = arm_table.get("joints", {})
+    if isinstance(value, list):
+        if len(value) != n_links or not all(isinstance(t, Mapping) for t in value):
+            r.fail(
+                "arm.joints",
+                f"must be one table per joint ({n_links}) as [[arm.joints]]. Got {value!r} instead.",
+            )
+        built = [_joint(r, dict(t), f"arm.joints[{i}]") for i, t in enumerate(value)]
+        rigid = [j is None for j, _ in built]
+        if any(rigid) and not all(rigid):
+            r.fail(
+                "arm.joints", "mixes rigid and flexible joints: give every joint a spring or none"
+            )
+        joints = None if all(rigid) else [j for j, _ in built if j is not None]
+        return joints, [d for _, d in built]
+    joint, description = _joint(r, r.table(arm_table, "joints", "arm."), "arm.joints")
+    return (None if joint is None else [joint] * n_links), description
+
+
+def _joint(
+    r: ScenarioReader, t: dict[str, Any], prefix: str
+) -> tuple[LinearJoint | NonlinearJoint | None, dict[str, Any]]:
     kind = r.kind(t, "arm.joints", JOINT_KINDS)
     if kind == "rigid":
         for key in t:
             if key != "kind":
                 r.fail(
-                    f"arm.joints.{key}",
-                    f"unknown key 'arm.joints.{key}' (rigid joints take no parameters)",
+                    f"{prefix}.{key}",
+                    f"unknown key '{prefix}.{key}' (rigid joints take no parameters)",
                     show_key=False,
                 )
         return None, {"kind": "rigid"}
@@ -309,24 +332,23 @@ def _joints(
     base = LinearJoint.default() if kind == "linear" else NonlinearJoint.default()
     allowed = tuple(f.name for f in dataclasses.fields(base))
     params = {k: v for k, v in t.items() if k != "kind"}
-    r.keys(params, "arm.joints", allowed, type(base).__name__)
+    r.keys(params, prefix, allowed, type(base).__name__)
     friction = params.pop("friction", kind == "nonlinear")
     if isinstance(friction, bool):
         params["friction"] = MakkarFriction.default() if friction else None
     elif isinstance(friction, Mapping):
         ft = dict(friction)
-        r.keys(ft, "arm.joints.friction", ("g1", "g2", "g3", "g4", "g5", "g6"), "MakkarFriction")
-        with r.library("arm.joints.friction", ft):
+        r.keys(ft, f"{prefix}.friction", ("g1", "g2", "g3", "g4", "g5", "g6"), "MakkarFriction")
+        with r.library(f"{prefix}.friction", ft):
             params["friction"] = dataclasses.replace(MakkarFriction.default(), **ft)
     else:
         r.fail(
-            "arm.joints.friction",
+            f"{prefix}.friction",
             f"must be true, false or a table of g1..g6. Got {friction!r} instead.",
         )
-    with r.library("arm.joints", params):
+    with r.library(prefix, params):
         joint = dataclasses.replace(base, **params)
-    description = {"kind": kind, **dataclasses.asdict(joint)}
-    return [joint] * n_links, description
+    return joint, {"kind": kind, **dataclasses.asdict(joint)}
 
 
 def _trajectory(r: ScenarioReader, data: Mapping[str, Any]) -> tuple[Any, dict[str, Any]]:
