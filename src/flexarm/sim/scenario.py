@@ -301,7 +301,7 @@ def _joints(
         if len(value) != n_links or not all(isinstance(t, Mapping) for t in value):
             r.fail(
                 "arm.joints",
-                f"must be one table per joint ({n_links}) as [[arm.joints]]. Got {value!r} instead.",
+                f"must be one table per joint ({n_links}) as [[arm.joints]]. Got {value!r}.",
             )
         built = [_joint(r, dict(t), f"arm.joints[{i}]") for i, t in enumerate(value)]
         rigid = [j is None for j, _ in built]
