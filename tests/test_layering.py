@@ -37,6 +37,8 @@ RANK = {name: k for k, names in enumerate(LAYERS) for name in names}
 
 # Inside a package: a module may import the modules listed before it (or its own
 # package's __init__ when that is lower still). Packages not listed are unordered.
+# A sub-package is one entry of its parent's list; its own modules are ordered by
+# the entry of its dotted name ("model.dynamics"), if it has one.
 WITHIN: dict[str, list[str]] = {
     "model": [
         "validity",
@@ -50,16 +52,13 @@ WITHIN: dict[str, list[str]] = {
         "packing",
         "kinematics",
         "lagrangian",
-        "dynamics_foreshortening",
-        "dynamics_recursive",
-        "dynamics_points",
-        "dynamics_two_links",
-        "dynamics",
+        "dynamics",  # the compiled dynamics, a sub-package ordered below
         "packed",
         "backends",
         "prescribed",
         "arm",
     ],
+    "model.dynamics": ["_link_terms", "_dense", "_recursive", "_two_links", "_points", "_forward"],
     "sensing": ["delays", "sensors"],
     "control": [
         "signals",
@@ -178,16 +177,20 @@ def flexarm_imports(path: pathlib.Path) -> set[str]:
 
 def allowed(importer: str, imported: str) -> bool:
     """Whether module ``importer`` may import ``imported`` (dotted, below flexarm)."""
-    top_a, top_b = importer.split(".")[0], imported.split(".")[0]
-    if top_a != top_b:
-        return RANK[top_b] < RANK[top_a]
-    order = WITHIN.get(top_a)
-    if order is None or "." not in importer or "." not in imported:
-        return True  # unordered package, or its __init__ (which gathers the package)
-    a, b = importer.split(".")[1], imported.split(".")[1]
-    if b not in order:
+    a, b = importer.split("."), imported.split(".")
+    if a[0] != b[0]:
+        return RANK[b[0]] < RANK[a[0]]
+    k = 0  # the deepest package holding both is a[:k]
+    while k < min(len(a), len(b)) and a[k] == b[k]:
+        k += 1
+    if k == len(a) or k == len(b):
+        return True  # a package's __init__ (which gathers it), or the module's own package
+    order = WITHIN.get(".".join(a[:k]))
+    if order is None:
+        return True  # an unordered package
+    if b[k] not in order:
         return False
-    return a not in order or order.index(b) <= order.index(a)
+    return a[k] not in order or order.index(b[k]) <= order.index(a[k])
 
 
 MODULES = sorted(p for p in SRC.rglob("*.py") if "__pycache__" not in p.parts)
@@ -199,13 +202,13 @@ def test_every_package_has_a_layer():
 
 
 def test_every_module_of_an_ordered_package_is_placed():
-    missing = [
-        module_name(p)
-        for p in MODULES
-        if "." in module_name(p)
-        and module_name(p).split(".")[0] in WITHIN
-        and module_name(p).split(".")[1] not in WITHIN[module_name(p).split(".")[0]]
-    ]
+    missing = []
+    for p in MODULES:
+        parts = module_name(p).split(".")
+        for k in range(1, len(parts)):
+            order = WITHIN.get(".".join(parts[:k]))
+            if order is not None and parts[k] not in order:
+                missing.append(module_name(p))
     assert not missing, f"place these in WITHIN in tests/test_layering.py: {missing}"
 
 
@@ -224,6 +227,13 @@ def test_no_upward_imports(path):
         ("model.arm", "fuzzy", False),  # peers of one layer
         ("model.modes", "model.arm", False),  # upward inside a package
         ("model.arm", "model.modes", True),
+        # inside a sub-package, and across its border
+        ("model.dynamics._forward", "model.dynamics._dense", True),
+        ("model.dynamics._dense", "model.dynamics._forward", False),
+        ("model.dynamics", "model.dynamics._forward", True),  # the package gathers it
+        ("model.packed", "model.dynamics._forward", True),
+        ("model.dynamics._dense", "model.packed", False),
+        ("model.dynamics._dense", "model.arrays", True),
         ("cli", "studies.reproduction", True),
     ],
 )

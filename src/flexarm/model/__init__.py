@@ -9,8 +9,9 @@
 * :mod:`~flexarm.model.prescribed` — the arm with its joint motion prescribed;
 * :mod:`~flexarm.model.validity` — what the model choices leave out, measured;
 * :mod:`~flexarm.model.arrays`, :mod:`~flexarm.model.dynamics` — the arm packed as plain
-  arrays and the compiled kernels that read them (for your own Numba loops), the
-  recursive (articulated-body) one in :mod:`~flexarm.model.dynamics_recursive`;
+  arrays and the compiled kernels that read them (for your own Numba loops): the
+  dense, the recursive (articulated-body) and the paper's scalar forward dynamics,
+  the mass matrix, the kinematics of a point;
 * :mod:`~flexarm.model.packed`, :mod:`~flexarm.model.backends` — the kernels behind
   cheap calls from Python (one packed buffer per arm), and which backend a public call
   of the arm takes;

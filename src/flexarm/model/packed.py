@@ -59,8 +59,9 @@ from .arrays import (
     Workspace,
     workspace_size,
 )
-from .dynamics import _forward_dynamics, _mass_and_bias
-from .dynamics_points import _point_state
+from .dynamics._dense import mass_and_bias
+from .dynamics._forward import forward_dynamics
+from .dynamics._points import point_state
 from .kernel_checks import shape_message, state_shapes
 
 __all__ = ["STACK_FLOATS", "PackedArm", "pack_buffer"]
@@ -358,7 +359,7 @@ def _dynamics(buf: F64, q: F64, dq: F64, tau: F64, out: F64) -> int:  # pragma: 
         n = q.shape[0]
         wbuf = _scratch(out, n, _scratch_size(n))
         ws = _workspace(wbuf, n, _own_mass(wbuf, n))
-        _forward_dynamics(q, dq, tau, _unpack(buf), ws, _view(out, 0, (n,), np.float64))
+        forward_dynamics(q, dq, tau, _unpack(buf), ws, _view(out, 0, (n,), np.float64))
     return status
 
 
@@ -389,7 +390,7 @@ def _mass_matrix(buf: F64, q: F64, out: F64) -> int:  # pragma: no cover - compi
         flat = _view(out, 0, (out.size,), np.float64)
         wbuf = _scratch(flat, n * n, _scratch_size(n))
         mass = _view(flat, 0, (n, n), np.float64)
-        _mass_and_bias(q, q, _unpack(buf), _workspace(wbuf, n, mass))  # M needs no dq
+        mass_and_bias(q, q, _unpack(buf), _workspace(wbuf, n, mass))  # M needs no dq
     return status
 
 
@@ -415,7 +416,7 @@ def _point(
     """Position of the point ``distance`` along ``link`` (basis ``phi``) into ``out`` (2,)."""
     status = _check(q, _sizes(buf)[1], 0)
     if status == _OK:
-        px, py, _, _ = _point_state(q, q, _unpack(buf), link, distance, phi)
+        px, py, _, _ = point_state(q, q, _unpack(buf), link, distance, phi)
         out[0] = px
         out[1] = py
     return status
@@ -431,7 +432,7 @@ def _point_rows(
     if status == _OK:
         model = _unpack(buf)
         for b in range(m):
-            px, py, _, _ = _point_state(q[b], q[b], model, link, distance, phi)
+            px, py, _, _ = point_state(q[b], q[b], model, link, distance, phi)
             out[b, 0] = px
             out[b, 1] = py
     return status

@@ -36,8 +36,8 @@ from ..control.signals import (
 )
 from ..errors import InvalidValueError
 from ..model.arrays import LEN, ArmArrays, Workspace, make_workspace
-from ..model.dynamics_points import _point_state
-from ..model.dynamics_two_links import _is_two_links_one_mode
+from ..model.dynamics._points import point_state
+from ..model.dynamics._two_links import is_two_links_one_mode
 from ..model.kernel_checks import check_model, check_vector, check_workspace
 from ._reference_kernels import ReferenceStream, stream_row
 from .integrator import _diverged, _rk4_step, _rk4_step_two_links_one_mode
@@ -195,7 +195,7 @@ def _run(
     order = sensor.pade_ad.shape[0]
     has_noise = sensor.noise.shape[0] > 0
     joint_sensor = sensor.link[0] < 0
-    two_links_one_mode = _is_two_links_one_mode(model)
+    two_links_one_mode = is_two_links_one_mode(model)
     o_angle, o_rate = y_angles(n_links), y_rates(n_links)
     o_point, o_modes = y_point(n_links), y_modes(n_links)
     o_ff = r_feedforward(n_links)
@@ -263,7 +263,7 @@ def _run(
             for c in range(y.shape[0]):
                 out_y[row, c] = y[c]
             if record_tip:
-                px, py, _, _ = _point_state(q, q, model, last_link, tip_distance, tip_phi)
+                px, py, _, _ = point_state(q, q, model, last_link, tip_distance, tip_phi)
                 out_tip[row, 0] = px
                 out_tip[row, 1] = py
             if streamed:

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from .._compile import compiled_as
 from ..errors import InvalidValueError
 from ..model.arrays import ArmArrays
-from ..model.dynamics_points import _point_kinematics
+from ..model.dynamics._points import point_kinematics
 from ..model.kernel_checks import check_model, check_vector
 
 __all__ = ["SensorArrays", "check_sensor_arrays", "sense", "sensor_arrays"]
@@ -196,7 +196,7 @@ def _sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) ->
         e = model.mode_start[n_links] if model.joint.shape[0] > 0 else 0  # motors or joints
         _rigid_chain_point(sensor.levers, q[e : e + n_links], dq[e : e + n_links], out)
     else:
-        _point_kinematics(q, dq, model, link, sensor.distance[0], sensor.phi, out)
+        point_kinematics(q, dq, model, link, sensor.distance[0], sensor.phi, out)
 
 
 def check_sensor_arrays(sensor: SensorArrays, model: ArmArrays, owner: str) -> tuple[int, int]:
