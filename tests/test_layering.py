@@ -53,6 +53,7 @@ WITHIN: dict[str, list[str]] = {
         "kinematics",
         "lagrangian",
         "dynamics",  # the compiled dynamics, a sub-package ordered below
+        "_buffer",
         "packed",
         "backends",
         "prescribed",

@@ -21,8 +21,8 @@ from hypothesis import strategies as st
 import flexarm as fa
 from flexarm.errors import InvalidTypeError, InvalidValueError
 from flexarm.model import dynamics
+from flexarm.model._buffer import scratch_size, unpacked, workspace
 from flexarm.model.arrays import make_workspace, workspace_shapes, workspace_size
-from flexarm.model.packed import _scratch_size, _unpacked, _workspace
 from helpers.arms import random_states, three_links
 
 L, EI, RHO = 4.5, 1676.0, 0.335
@@ -75,7 +75,7 @@ def close(a, b, tol=1e-12):
 
 # --------------------------------------------------------------- the same numbers
 def test_the_buffer_unpacks_to_the_arms_arrays(arm):
-    got = _unpacked(arm._packed().buf)
+    got = unpacked(arm._packed().buf)
     for name in arm.arrays._fields:
         want = getattr(arm.arrays, name)
         assert getattr(got, name).dtype == want.dtype, name
@@ -84,7 +84,7 @@ def test_the_buffer_unpacks_to_the_arms_arrays(arm):
 
 @nb.njit
 def _workspace_shapes(wbuf, n):  # pragma: no cover - compiled
-    ws = _workspace(wbuf, n, wbuf[: n * n].reshape((n, n)))
+    ws = workspace(wbuf, n, wbuf[: n * n].reshape((n, n)))
     return (
         ws.bias.shape,
         ws.jac.shape,
@@ -410,7 +410,7 @@ _PROPERTY_ARM = ARMS["three-links-stiffening"]()
 
 @nb.njit
 def _scratch_sizes(top):  # pragma: no cover - compiled
-    return [_scratch_size(n) for n in range(1, top)]
+    return [scratch_size(n) for n in range(1, top)]
 
 
 def test_the_compiled_workspace_size_is_workspace_size():
