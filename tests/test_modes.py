@@ -649,36 +649,32 @@ def test_mass_normalisation_generalised_mass_is_identity(mu, j):
     np.testing.assert_allclose(gm, np.eye(n), rtol=0, atol=1e-12)
 
 
-@pytest.mark.parametrize("n", [1, 5, 20, 50])
-def test_modal_stiffness_cantilever(n):
-    modes = BeamModes(L_ARM, EI_ARM, RHO_ARM, n_modes=n)
-    lam = np.array([float(_mp_cantilever_root(k)) for k in range(1, n + 1)])
+def assert_stiffness_is_omega_squared(modes, lam):
+    """The modal stiffness, exact and by quadrature, is ``diag(omega**2)`` with
+    ``omega = lam**2 sqrt(EI / (rho L**4))`` from the independent roots ``lam``."""
+    n = lam.shape[0]
     w2 = lam**4 * EI_ARM / (RHO_ARM * L_ARM**4)
     scale = np.sqrt(np.outer(w2, w2))
     np.testing.assert_allclose(modes.modal_stiffness / scale, np.eye(n), rtol=0, atol=1e-12)
     np.testing.assert_allclose(
         modes.stiffness_by_quadrature() / scale, np.eye(n), rtol=0, atol=1e-11
     )
+
+
+@pytest.mark.parametrize("n", [1, 5, 20, 50])
+def test_modal_stiffness_cantilever(n):
+    modes = BeamModes(L_ARM, EI_ARM, RHO_ARM, n_modes=n)
+    lam = np.array([float(_mp_cantilever_root(k)) for k in range(1, n + 1)])
+    assert_stiffness_is_omega_squared(modes, lam)
 
 
 @pytest.mark.parametrize(("mu", "j"), [(0.5, 0.0), (2.0, 0.3), (10.0, 1.0)])
 def test_modal_stiffness_clamped_mass(mu, j):
     n = 10
-    modes = BeamModes(
-        L_ARM,
-        EI_ARM,
-        RHO_ARM,
-        n_modes=n,
-        tip_mass=mu * RHO_ARM * L_ARM,
-        tip_inertia=j * RHO_ARM * L_ARM**3,
-    )
+    tips = {"tip_mass": mu * RHO_ARM * L_ARM, "tip_inertia": j * RHO_ARM * L_ARM**3}
+    modes = BeamModes(L_ARM, EI_ARM, RHO_ARM, n_modes=n, **tips)
     lam = np.array([float(r) for r in _mp_clamped_mass_roots(n, mu, j)])
-    w2 = lam**4 * EI_ARM / (RHO_ARM * L_ARM**4)
-    scale = np.sqrt(np.outer(w2, w2))
-    np.testing.assert_allclose(modes.modal_stiffness / scale, np.eye(n), rtol=0, atol=1e-12)
-    np.testing.assert_allclose(
-        modes.stiffness_by_quadrature() / scale, np.eye(n), rtol=0, atol=1e-11
-    )
+    assert_stiffness_is_omega_squared(modes, lam)
 
 
 @pytest.mark.parametrize(("mu", "j"), [(0.0, 0.0), (0.5, 0.0), (2.0, 0.3)])
@@ -807,14 +803,14 @@ def test_the_roots_kept_per_process_are_the_computed_ones_and_yours_to_change():
     """Small root sets are kept once per process (a sweep builds the same links again
     and again): each call still returns its own writable array, equal to a fresh
     computation; large sets are computed each time."""
-    from flexarm.model import modes
+    from flexarm.model import _roots
 
     first = clamped_mass_roots(5, 0.3, 0.01)
     first[:] = -1.0  # the caller's own copy
     again = clamped_mass_roots(5, 0.3, 0.01)
-    assert np.array_equal(again, modes._roots(5, 0.3, 0.01)) and np.all(again > 0)
-    big = modes._CACHED_UP_TO + 1
-    np.testing.assert_array_equal(clamped_mass_roots(big, 0.3), modes._roots(big, 0.3, 0.0))
+    assert np.array_equal(again, _roots.roots(5, 0.3, 0.01)) and np.all(again > 0)
+    big = _roots.CACHED_UP_TO + 1
+    np.testing.assert_array_equal(clamped_mass_roots(big, 0.3), _roots.roots(big, 0.3, 0.0))
     small, large = (BeamModes(2.0, 1676.0, 0.335, n_modes=m) for m in (5, big))
     # the kept rule (5 modes) and one computed afresh (65 modes; more nodes): both exact
     np.testing.assert_allclose(small.mass_integral, large.mass_integral[:5], rtol=1e-12)
