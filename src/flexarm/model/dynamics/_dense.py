@@ -26,6 +26,7 @@ __all__ = [
     "forward_dynamics_dense",
     "generalized_forces",
     "joint_forces",
+    "ldlt_factor",
     "ldlt_solve",
     "mass_and_bias",
 ]
@@ -233,6 +234,27 @@ def assemble_local(q: F64, dq: F64, arrays: ArmArrays, ws: Workspace) -> None:  
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
+def ldlt_factor(M: F64, a0: int, a1: int, inv_d: F64) -> None:  # pragma: no cover - compiled
+    """``M[a0:a1, a0:a1] = L D L'`` in place from its lower triangle: the unit factor
+    ``L`` below the diagonal, ``D`` on it, ``1 / D`` into ``inv_d[a0:a1]``."""
+    for j in range(a0, a1):
+        # row j of L D (unscaled), then the pivot
+        for k in range(a0, j):
+            t = M[j, k]
+            for p in range(a0, k):
+                t -= M[j, p] * M[k, p]
+            M[j, k] = t  # = L[j, k] D[k], scaled below
+        d = M[j, j]
+        for k in range(a0, j):
+            t = M[j, k]
+            lk_ = t * inv_d[k]
+            d -= t * lk_
+            M[j, k] = lk_
+        M[j, j] = d
+        inv_d[j] = 1.0 / d
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
 def ldlt_solve(M: F64, b: F64, inv_d: F64) -> None:  # pragma: no cover - compiled
     """Solve ``M x = b`` in place (``x`` into ``b``) for symmetric positive definite
     ``M`` given by its lower triangle.
@@ -243,21 +265,7 @@ def ldlt_solve(M: F64, b: F64, inv_d: F64) -> None:  # pragma: no cover - compil
     operations is half that of a Cholesky factorisation.
     """
     n = M.shape[0]
-    for j in range(n):
-        # row j of L D (unscaled), then the pivot
-        for k in range(j):
-            t = M[j, k]
-            for p in range(k):
-                t -= M[j, p] * M[k, p]
-            M[j, k] = t  # = L[j, k] D[k], scaled below
-        d = M[j, j]
-        for k in range(j):
-            t = M[j, k]
-            lk_ = t * inv_d[k]
-            d -= t * lk_
-            M[j, k] = lk_
-        M[j, j] = d
-        inv_d[j] = 1.0 / d
+    ldlt_factor(M, 0, n, inv_d)
     for i in range(n):
         t = b[i]
         for k in range(i):

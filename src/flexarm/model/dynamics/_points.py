@@ -23,27 +23,9 @@ F64 = NDArray[np.float64]
 def point_state(
     q: F64, dq: F64, arrays: ArmArrays, link: int, distance: float, phi: F64
 ) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
-    """Position and velocity of a point on a link, deflection included.
-
-    Parameters
-    ----------
-    q, dq : ndarray, shape (n_dof,)
-    arrays : ArmArrays
-    link : int
-        0-based link index.
-    distance : float
-        Distance along the undeformed link from its joint, m.
-    phi : ndarray, shape (n_modes of ``link``,) or (n_modes + n_modes**2,)
-        Mode shapes of ``link`` evaluated at ``distance``; with geometric
-        stiffening, followed by the shortening matrix ``S(distance)`` row by row
-        (:meth:`flexarm.FlexibleArm.point_basis` builds it). Without it the
-        point's own foreshortening is left out.
-
-    Returns
-    -------
-    tuple of 4 float
-        ``x, y`` (m) and ``vx, vy`` (m/s) in the base frame.
-    """
+    """Position and velocity of a point on a link, deflection included: ``x, y`` (m)
+    and ``vx, vy`` (m/s) in the base frame. The parameters are those of
+    :func:`flexarm.model.dynamics.point_kinematics` (``arrays`` its ``model``)."""
     ms = arrays.mode_start
     shortening = arrays.shortening_quartic.shape[1] > 0
     alpha = 0.0

@@ -63,31 +63,12 @@ from ..arrays import (
     ArmArrays,
     Workspace,
 )
+from ._dense import ldlt_factor
 from ._link_terms import link_foreshortening, link_sums
 
 __all__ = ["accelerations_recursive"]
 
 F64 = NDArray[np.float64]
-
-
-@nb.njit(cache=True, nogil=True, inline="always")
-def _ldlt_block(M: F64, a0: int, a1: int, inv_d: F64) -> None:  # pragma: no cover - compiled
-    """``M[a0:a1, a0:a1] = L D L'`` in place from its lower triangle (unit ``L`` below
-    the diagonal, ``D`` on it, ``1 / D`` into ``inv_d[a0:a1]``)."""
-    for j in range(a0, a1):
-        for k in range(a0, j):
-            t = M[j, k]
-            for p in range(a0, k):
-                t -= M[j, p] * M[k, p]
-            M[j, k] = t
-        d = M[j, j]
-        for k in range(a0, j):
-            t = M[j, k]
-            lk_ = t * inv_d[k]
-            d -= t * lk_
-            M[j, k] = lk_
-        M[j, j] = d
-        inv_d[j] = 1.0 / d
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -242,7 +223,7 @@ def accelerations_recursive(
             ch[g, CH_ZB] = rhs[g] - bg
         # ---- eliminate the modes: Z = K_dd^-1 K_da, z = K_dd^-1 (Q - k)
         if a1 > a0:
-            _ldlt_block(K, a0, a1, ws.inv_diag)
+            ldlt_factor(K, a0, a1, ws.inv_diag)
             for col in range(CH_Z, CH_ZB + 1):
                 _solve_block(K, a0, a1, ws.inv_diag, ch, col)
         for g in range(a0, a1):
