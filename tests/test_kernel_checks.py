@@ -40,7 +40,8 @@ def _call(**changes):
 
 
 def test_the_reported_heap_corruption_is_an_error():
-    """An output shorter than n_dof (the issue's case) is refused, naming it."""
+    """An output shorter than n_dof (which corrupted the heap before the checks) is
+    refused, naming it."""
     with pytest.raises(InvalidValueError, match=r"'ddq' parameter of forward_dynamics.*\(4,\)"):
         dynamics.forward_dynamics(
             np.zeros(4), np.zeros(4), np.zeros(2), ARM.arrays, make_workspace(4), np.empty(2)

@@ -3,10 +3,10 @@
 Oracles used here (none of them calls the code under test):
 
 * published numbers: the cantilever roots 1.8751040687, 4.6940911330, ...
-  (spec §1; Blevins, *Formulas for Natural Frequency and Mode Shape*), the
+  (Blevins, *Formulas for Natural Frequency and Mode Shape*), the
   clamped beam with a tip mass equal to its own mass, ``beta_1 L = 1.24792``
-  (Blevins, beams with a tip mass), and the paper's ``omega_1 = 12.281 rad/s`` (spec §1);
-* the frequency equation of spec §1, *unscaled*, solved by :func:`mpmath.findroot`
+  (Blevins, beams with a tip mass), and the paper's ``omega_1 = 12.281 rad/s`` (Sec. III);
+* the clamped-mass frequency equation, *unscaled*, solved by :func:`mpmath.findroot`
   at 50 (or more) significant digits;
 * the textbook shapes ``cosh - cos - sigma (sinh - sin)`` evaluated in mpmath with
   enough digits to absorb the ``e**lam`` cancellation;
@@ -32,14 +32,14 @@ import scipy.special as sps
 from flexarm.modes import BeamModes, cantilever_roots, clamped_mass_roots
 
 PUBLISHED_ROOTS = (1.8751040687, 4.6940911330, 7.8547574382, 10.9955407349, 14.1371683910)
-L_ARM, EI_ARM, RHO_ARM = 4.5, 1676.0, 0.335  # spec §1, the paper's link
+L_ARM, EI_ARM, RHO_ARM = 4.5, 1676.0, 0.335  # the paper's link (Sec. III)
 RATIOS = (0.0, 0.1, 1.0, 10.0, 1e3, 1e6)
 DOCUMENTED_ROOT_RTOL = 1e-14  # clamped_mass_roots docstring: "accurate to about 1e-14 relative"
 
 
 # --------------------------------------------------------------------------- mpmath oracles
 def _freq_eq(lam, mu, j):
-    """Left side of the clamped-mass frequency equation of spec §1, unscaled (mpmath)."""
+    """Left side of the clamped-mass frequency equation, unscaled (mpmath)."""
     c, s, ch, sh = mp.cos(lam), mp.sin(lam), mp.cosh(lam), mp.sinh(lam)
     return (
         1
@@ -196,7 +196,7 @@ def test_cantilever_roots_match_published_values():
 def test_paper_arm_first_frequency():
     modes = BeamModes(L_ARM, EI_ARM, RHO_ARM, n_modes=1)
     assert modes.frequencies.shape == (1,)
-    # spec §1: 12.281 rad/s, i.e. 1.955 Hz (the paper's "Hz" is a typo).
+    # the paper's Sec. III: 12.281 rad/s, i.e. 1.955 Hz (the paper's "Hz" is a typo).
     assert abs(modes.frequencies[0] - 12.281) < 5e-4
     assert abs(modes.frequencies_hz[0] - 1.955) < 5e-4
     # and to full precision from the published root: omega = lam**2 sqrt(EI / (rho L**4)).

@@ -172,9 +172,9 @@ def _point_rows(
     m = q.shape[0]
     status = rows_status(q, m, sizes(buf)[1], 0)
     if status == OK:
-        model = unpack(buf)
+        arrays = unpack(buf)
         for b in range(m):
-            px, py, _, _ = point_state(q[b], q[b], model, link, distance, phi)
+            px, py, _, _ = point_state(q[b], q[b], arrays, link, distance, phi)
             out[b, 0] = px
             out[b, 1] = py
     return status

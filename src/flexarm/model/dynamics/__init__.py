@@ -1,9 +1,9 @@
 r"""Compiled dynamics of the flexible arm: plain arrays in, plain arrays out.
 
 These Numba functions are what the simulator calls millions of times. They take
-the packed model :class:`ArmArrays` (built once by
-:attr:`flexarm.FlexibleArm.arrays`) and a :class:`Workspace` allocated once, so
-a call allocates nothing. The readable NumPy implementation in
+the arm packed as plain arrays, :class:`ArmArrays` (built once by
+:attr:`flexarm.FlexibleArm.arrays`; their parameter ``model``), and a
+:class:`Workspace` allocated once, so a call allocates nothing. The readable NumPy implementation in
 :mod:`flexarm.model.arm` is their reference; the tests hold the two together.
 
 The model (see :mod:`flexarm.model.arm` for the derivation): the kinetic energy of
