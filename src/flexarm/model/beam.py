@@ -199,12 +199,8 @@ class UniformBeam:
 
     Parameters
     ----------
-    length : float
-        ``L`` in m (> 0).
-    flexural_rigidity : float
-        ``EI`` in N m**2 (> 0).
-    linear_density : float
-        ``rho`` in kg/m (> 0).
+    length, flexural_rigidity, linear_density : float
+        ``L`` in m, ``EI`` in N m**2, ``rho`` in kg/m, all > 0.
     n_modes : int
         Assumed modes kept (>= 0).
     """
