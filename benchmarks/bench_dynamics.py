@@ -54,7 +54,7 @@ Section "growth". One forward-dynamics call from 4 to 64 coordinates, along thre
 lines: more rigid links, more links of one mode each (and of three modes with
 geometric stiffening, the default of an arm you build), and more modes on two
 links. Per arm: the dense kernel (mass matrix and ``L D L'``) and the recursive
-kernel (articulated-body, :mod:`flexarm.model.dynamics_recursive`), both as
+kernel (articulated-body, :func:`flexarm.model.dynamics.forward_dynamics_recursive`), both as
 ``kernel, dependent calls``; ``arm.forward_dynamics`` from Python (the kernel the
 arm chooses); and Pinocchio's ``aba`` from Python on a rigid chain with as many
 joints as the arm has coordinates. Growth exponents are log-log slopes.

@@ -17,26 +17,7 @@ from scipy.integrate import solve_ivp
 
 import flexarm as fa
 from flexarm.modes import BeamModes
-
-
-def random_state(arm: fa.FlexibleArm, rng: np.random.Generator, scale: float = 0.1):
-    """Angles in [-pi, pi], modal coordinates giving tip deflections ~ scale * L,
-    joint rates ~ 1 rad/s and tip deflection rates ~ L per second."""
-    q = np.empty(arm.n_dof)
-    dq = rng.normal(size=arm.n_dof)
-    q[: arm.n_links] = rng.uniform(-np.pi, np.pi, arm.n_links)
-    for i, (lk, bm) in enumerate(zip(arm.links, arm.modes, strict=True)):
-        s = arm.modal_slice(i)
-        if lk.n_modes:
-            unit = lk.length / np.abs(bm.tip_deflection)
-            q[s] = rng.normal(size=lk.n_modes) * scale * unit
-            dq[s] *= unit
-    return q, dq
-
-
-# The model before geometric stiffening and clamped-mass defaults: tests written for
-# it state it (the defaults of a user-built arm changed to stiffening, clamped-mass).
-LINEAR_CLAMPED_FREE = {"boundary": "clamped-free", "geometric_stiffening": False}
+from helpers.arms import LINEAR_CLAMPED_FREE, random_state, three_links, two_short_links
 
 ARMS = {
     "paper": lambda: fa.FlexibleArm.paper(),
@@ -44,38 +25,13 @@ ARMS = {
     "one-link": lambda: fa.FlexibleArm(
         [fa.Link(1.2, 3.0, 0.8, n_modes=3, hub_inertia=0.1)], **LINEAR_CLAMPED_FREE
     ),
-    "three-links-mixed": lambda: fa.FlexibleArm(
-        [
-            fa.Link(1.0, 5.0, 1.1, n_modes=2, hub_inertia=0.2),
-            fa.Link(0.8, 2.0, 0.6, n_modes=0, hub_mass=0.5, hub_inertia=0.03),
-            fa.Link(0.6, 1.5, 0.4, n_modes=3, hub_mass=0.2, hub_inertia=0.01),
-        ],
-        payload_mass=0.3,
-        payload_inertia=0.02,
-        **LINEAR_CLAMPED_FREE,
-    ),
-    "clamped-mass": lambda: fa.FlexibleArm(
-        [fa.Link(1.3, 4.0, 0.9, n_modes=2, hub_mass=0.3), fa.Link(0.9, 2.5, 0.5, n_modes=2)],
-        payload_mass=0.4,
-        payload_inertia=0.05,
-        boundary="clamped-mass",
-        geometric_stiffening=False,
-    ),
+    "three-links-mixed": lambda: three_links(**LINEAR_CLAMPED_FREE),
+    "clamped-mass": lambda: two_short_links(2, boundary="clamped-mass", geometric_stiffening=False),
     # geometric stiffening (the default of an arm a user builds): foreshortening in the map
-    "stiffening-three-links": lambda: fa.FlexibleArm(
-        [
-            fa.Link(1.0, 5.0, 1.1, n_modes=2, hub_inertia=0.2),
-            fa.Link(0.8, 2.0, 0.6, n_modes=0, hub_mass=0.5, hub_inertia=0.03),
-            fa.Link(0.6, 1.5, 0.4, n_modes=3, hub_mass=0.2, hub_inertia=0.01),
-        ],
-        payload_mass=0.3,
-        payload_inertia=0.02,
-        boundary="clamped-mass",
-        geometric_stiffening=True,
+    "stiffening-three-links": lambda: three_links(
+        boundary="clamped-mass", geometric_stiffening=True
     ),
-    "stiffening-defaults": lambda: fa.FlexibleArm(
-        [fa.Link(1.3, 4.0, 0.9, hub_mass=0.3), fa.Link(0.9, 2.5, 0.5)], payload_mass=0.4
-    ),
+    "stiffening-defaults": lambda: two_short_links(payload_inertia=0.0),
     "amplitude-normalised": lambda: fa.FlexibleArm.paper(
         n_modes=2, mode_normalization="amplitude", mode_amplitude=0.1
     ),

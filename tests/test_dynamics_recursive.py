@@ -19,7 +19,7 @@ import flexarm as fa
 from flexarm.errors import InvalidValueError
 from flexarm.model import dynamics
 from flexarm.model.arrays import make_workspace
-from flexarm.model.dynamics_recursive import accelerations_recursive
+from helpers.arms import random_states
 
 TOL = 1e-10
 JOINT = fa.NonlinearJoint.default(fa.MakkarFriction.default())
@@ -69,21 +69,8 @@ ARMS = {
 
 
 def states(arm, m, seed=5, deflection=0.03):
-    rng = np.random.default_rng(seed)
-    n, nl = arm.n_dof, arm.n_links
-    q = np.empty((m, n))
-    dq = rng.normal(size=(m, n))
-    q[:, :nl] = rng.uniform(-np.pi, np.pi, (m, nl))
-    for i, (lk, bm) in enumerate(zip(arm.links, arm.modes, strict=True)):
-        if lk.n_modes:
-            unit = lk.length / np.abs(bm.tip_deflection)
-            s = arm.modal_slice(i)
-            q[:, s] = rng.normal(size=(m, lk.n_modes)) * deflection * unit
-            dq[:, s] *= 0.3 * unit
-    if arm.has_flexible_joints:
-        q[:, arm.motor_slice] = q[:, :nl] + rng.uniform(-2e-3, 2e-3, (m, nl))
-        dq[:, arm.motor_slice] += rng.normal(size=(m, nl))
-    return q, dq, rng.uniform(-5.0, 5.0, (m, nl))
+    """``m`` random states and torques, the motors turning ~1 rad/s against their links."""
+    return random_states(arm, m, seed, deflection, motor_rates=True)
 
 
 def run(kernel, arm, q, dq, tau):
@@ -155,7 +142,7 @@ def test_the_recursive_kernels_check_their_arguments():
         dynamics.forward_dynamics_dense(q, dq, np.zeros(n + 1), arm.arrays, make_workspace(n), q)
     with pytest.raises(InvalidValueError, match=r"'ws\.chain' parameter of accelerations_rec"):
         ws = make_workspace(n)._replace(chain=np.zeros((n, 3)))
-        accelerations_recursive(q, dq, arm.arrays, ws, np.empty(n))
+        dynamics.accelerations_recursive(q, dq, arm.arrays, ws, np.empty(n))
 
 
 @settings(max_examples=25, deadline=None)

@@ -7,6 +7,9 @@ conservation and the power balance, convergence to the rigid-joint arm.
 
 from __future__ import annotations
 
+import math
+import re
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -314,17 +317,83 @@ def paper_arm_with_default_joints():
     return fa.FlexibleArm.paper(joints=[NonlinearJoint.default(MakkarFriction.default())] * 2)
 
 
-def test_default_parameters_are_documented_values():
-    j = NonlinearJoint.default()
-    assert (j.a1, j.a2, j.ksw, j.asw, j.motor_inertia) == (1.0e4, 4.0e7, 6.0e3, 1.6e7, 0.3)
-    assert j.a1 > j.ksw
-    # the windup region holds torques below about 1 N m
-    assert float(j.torque(1 / np.sqrt(j.asw))) == pytest.approx(
-        1.0 + 6e3 * (1 - np.exp(-1)) / 4e3, rel=0.2
+def documented_defaults() -> dict[str, float]:
+    """The default joint's numbers as the table of flexarm.model.joints' docstring
+    states them ("a1  1.0e4 N m/rad  reasoning ...", "g1, g4  0.5, 1.0 N m  ...")."""
+    import flexarm.model.joints as joints
+
+    found = {}
+    row = re.compile(r"^(\w+(?:, \w+)?) {2,}([-+.\de]+(?:, [-+.\de]+)?) ")
+    for line in joints.__doc__.splitlines():
+        m = row.match(line)
+        if m:
+            names, values = m.group(1).split(", "), m.group(2).split(", ")
+            found.update(zip(names, map(float, values), strict=True))
+    return found
+
+
+def test_the_defaults_are_the_documented_table():
+    """The defaults are the numbers the docstring's table gives and reasons about."""
+    doc = documented_defaults()
+    assert set(doc) == {"a1", "ksw", "asw", "a2", "J_m", "g1", "g2", "g3", "g4", "g5", "g6"}
+    j, f = NonlinearJoint.default(), MakkarFriction.default()
+    assert (j.a1, j.a2, j.ksw, j.asw, j.motor_inertia) == tuple(
+        doc[k] for k in ("a1", "a2", "ksw", "asw", "J_m")
     )
+    assert tuple(f.params) == tuple(doc[f"g{k}"] for k in range(1, 7))
+    assert LinearJoint.default().stiffness == j.a1
+    assert LinearJoint.default().motor_inertia == j.motor_inertia
+    assert j.a1 > j.ksw
+
+
+def test_the_default_joint_does_what_its_table_says():
+    """Each reason of the table, against the spring law's closed form
+    tau(D) = D (a1 + a2 D**2 - ksw exp(-asw D**2)) evaluated here, not by the class.
+
+    Tolerances: the law and its closed form are the same few float64 operations in
+    another order, with no cancellation (every term is within a factor 3 of the
+    result), so they agree to a few ulp; 1e-14 relative leaves margin. A wrong sign,
+    exponent or coefficient in the law moves the torque by 1e-3 or more.
+    """
+    doc = documented_defaults()
+    a1, a2, ksw, asw = doc["a1"], doc["a2"], doc["ksw"], doc["asw"]
+    j = NonlinearJoint.default()
+
+    def tau(d):
+        return d * (a1 + a2 * d * d - ksw * math.exp(-asw * d * d))
+
+    # stiffness at zero deflection a1 - ksw = 0.4 a1 (harmonic drives: ~0.5)
+    assert float(j.tangent_stiffness(0.0)) == pytest.approx(0.4 * a1, rel=1e-15)
+    # the windup region |D| < 1/sqrt(asw) = 2.5e-4 rad holds torques below
+    # (a1 - ksw) 2.5e-4 = 1 N m; at its edge the law gives its closed form
+    edge = 1.0 / math.sqrt(asw)
+    assert edge == pytest.approx(2.5e-4, rel=1e-15)
+    assert (a1 - ksw) * edge == pytest.approx(1.0, rel=1e-15)
+    assert float(j.torque(edge)) == pytest.approx(tau(edge), rel=1e-14)
+    assert float(j.torque(-edge)) == pytest.approx(-tau(edge), rel=1e-14)
+    # hardening adds 10 % to the (secant) stiffness at 5e-3 rad, 50 N m linear:
+    # the windup term is exp(-400) there, below any rounding
+    assert a1 * 5e-3 == pytest.approx(50.0, rel=1e-15)
+    assert float(j.torque(5e-3)) == pytest.approx(1.1 * a1 * 5e-3, rel=1e-14)
+    assert float(j.torque(5e-3)) == pytest.approx(tau(5e-3), rel=1e-14)
+    # J_m: a rotor of 3e-5 kg m**2 reflected through a 100:1 gear
+    assert j.motor_inertia == pytest.approx(3e-5 * 100**2, rel=1e-15)
+    # the shoulder's joint mode on the rigid-link estimate, sqrt(a1 / I) with I the
+    # straight arm's inertia about the shoulder (a uniform rod of 9 m, closed form),
+    # is 11 rad/s, next to the links' 12.3 rad/s
+    arm = fa.FlexibleArm.paper()
+    inertia = 0.335 * 9.0**3 / 3.0
+    assert arm.mass_matrix(np.zeros(arm.n_dof))[0, 0] == pytest.approx(inertia, rel=1e-13)
+    assert round(math.sqrt(a1 / inertia)) == 11
+    assert arm.link_frequencies[0][0] == pytest.approx(12.281, abs=5e-4)
+    # friction: breakaway about g1 + g4 = 1.5 N m, 3 % of a 50 N m rated torque;
+    # above the Stribeck velocities (1/g3 = 0.1 rad/s) the Coulomb and viscous parts
+    # remain, g4 + g6 v, to g1 (1 - tanh(g3 v)) ~ 2e-9 N m at 1 rad/s
     f = MakkarFriction.default()
     assert f.static_level == pytest.approx(1.5)
-    assert LinearJoint.default().stiffness == j.a1
+    assert f.static_level / 50.0 == pytest.approx(0.03, rel=1e-15)
+    assert (1 / doc["g2"], 1 / doc["g3"], 1 / doc["g5"]) == pytest.approx((0.01, 0.1, 0.01))
+    assert float(f(1.0)) == pytest.approx(doc["g4"] + doc["g6"] * 1.0, rel=0, abs=1e-8)
 
 
 # ------------------------------------------------------------------ bad input

@@ -40,7 +40,8 @@ def _call(**changes):
 
 
 def test_the_reported_heap_corruption_is_an_error():
-    """An output shorter than n_dof (the issue's case) is refused, naming it."""
+    """An output shorter than n_dof (which corrupted the heap before the checks) is
+    refused, naming it."""
     with pytest.raises(InvalidValueError, match=r"'ddq' parameter of forward_dynamics.*\(4,\)"):
         dynamics.forward_dynamics(
             np.zeros(4), np.zeros(4), np.zeros(2), ARM.arrays, make_workspace(4), np.empty(2)
@@ -188,55 +189,54 @@ def _decorator_name(node: ast.expr) -> str:
     return ast.unparse(target)
 
 
-def _module_of(path: Path, root: Path) -> str:
-    parts = list(path.relative_to(root).with_suffix("").parts)
-    return ".".join(["flexarm", *(parts[:-1] if parts[-1] == "__init__" else parts)])
+ROOT = Path(flexarm.__file__).parent
+COMPILED = {"nb.njit", "njit_runtime_free", "numba.njit", "njit"}
 
 
-def _is_module(dotted: str) -> bool:
-    """Whether ``dotted`` names one of flexarm's modules or packages."""
-    if not dotted.startswith("flexarm."):
-        return False
-    path = Path(flexarm.__file__).parent.joinpath(*dotted.split(".")[1:])
-    return path.with_suffix(".py").is_file() or (path / "__init__.py").is_file()
+def _module_of(path: Path) -> str:
+    """Dotted name of a flexarm source file: "flexarm.model.dynamics._points"."""
+    parts = ["flexarm", *path.relative_to(ROOT).with_suffix("").parts]
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def _imports(tree: ast.Module, module: str, is_package: bool) -> dict[str, tuple[str, str]]:
-    """What the top-level imports of ``module`` bind: local name -> (module, name), with
-    ``name`` empty where the local name is a module."""
+def _imports(module: str, tree: ast.Module, is_package: bool) -> dict[str, str]:
+    """Local name -> the dotted object it stands for, from the module's imports
+    ("point_kinematics" -> "flexarm.model.dynamics._points.point_kinematics")."""
     package = module if is_package else module.rpartition(".")[0]
-    bound: dict[str, tuple[str, str]] = {}
-    for node in tree.body:
+    found = {}
+    for node in ast.walk(tree):
         if isinstance(node, ast.ImportFrom):
-            base = package.split(".")[: len(package.split(".")) - max(node.level - 1, 0)]
-            source = ".".join([*base, node.module] if node.module else base)
-            if node.level == 0:
+            base = package.split(".")
+            if node.level:
+                base = base[: len(base) - (node.level - 1)]
+                source = ".".join([*base, node.module] if node.module else base)
+            else:
                 source = node.module or ""
             for alias in node.names:
-                local = alias.asname or alias.name
-                sub = f"{source}.{alias.name}"
-                if _is_module(sub):
-                    bound[local] = (sub, "")  # a module
-                else:
-                    bound[local] = (source, alias.name)
+                found[alias.asname or alias.name] = f"{source}.{alias.name}"
         elif isinstance(node, ast.Import):
             for alias in node.names:
-                bound[alias.asname or alias.name.split(".")[0]] = (alias.name, "")
-    return bound
+                found[alias.asname or alias.name] = alias.name
+    return found
 
 
-def test_internal_compiled_code_calls_the_bare_kernels():
-    """flexarm's own compiled loops call the bare kernels, not the checked public faces:
-    inside compiled code a public face is an overload that is not inlined, and one
-    compiled with the refcount runtime pays an incref/decref pair for each of the
-    model's ~30 arrays at every call (the closed loop ran 1.5x slower that way).
-    The runtime-free overloads (``compiled_as(..., runtime_free=True)``) are calls
-    by design. A bare kernel may share its face's name in an internal module: a call
-    is resolved to the module the name is bound from."""
-    root = Path(flexarm.__file__).parent
-    trees = {path: ast.parse(path.read_text()) for path in root.rglob("*.py")}
-    costly = set()  # (module, name) of the public faces with costly overloads
-    for path, tree in trees.items():
+def _costly_calls(sources: dict[str, tuple[ast.Module, bool]]) -> tuple[set[str], list[str]]:
+    """The checked public faces whose compiled overload is a costly call (compiled
+    with the refcount runtime), as dotted names, and the calls of them from
+    flexarm's own compiled functions ("module:line function")."""
+    imports = {m: _imports(m, tree, pkg) for m, (tree, pkg) in sources.items()}
+
+    def resolve(dotted: str) -> str:
+        """Follow re-exports: the dotted name of where the object is defined."""
+        for _ in range(10):
+            module, _, name = dotted.rpartition(".")
+            if module not in imports or name not in imports[module]:
+                return dotted
+            dotted = imports[module][name]
+        return dotted
+
+    costly = set()
+    for module, (tree, _) in sources.items():
         for node in ast.walk(tree):
             if isinstance(node, ast.FunctionDef):
                 for dec in node.decorator_list:
@@ -245,41 +245,67 @@ def test_internal_compiled_code_calls_the_bare_kernels():
                         and _decorator_name(dec) == "compiled_as"
                         and not any(k.arg == "runtime_free" for k in dec.keywords)
                     ):
-                        costly.add((_module_of(path, root), ast.unparse(dec.args[0])))
-    assert {"rk4_step", "diverged", "sense", "point_kinematics"} <= {n for _, n in costly}
+                        face = ast.unparse(dec.args[0])
+                        costly.add(resolve(imports[module].get(face, f"{module}.{face}")))
     offenders = []
-    for path, tree in trees.items():
-        module = _module_of(path, root)
-        bound = _imports(tree, module, path.name == "__init__.py")
+    for module, (tree, _) in sources.items():
+        local = {n.name for n in tree.body if isinstance(n, ast.FunctionDef | ast.ClassDef)}
         for node in ast.walk(tree):
             if not isinstance(node, ast.FunctionDef):
                 continue
-            names = {_decorator_name(d) for d in node.decorator_list}
-            if not names & {"nb.njit", "njit_runtime_free", "numba.njit", "njit"}:
+            if not {_decorator_name(d) for d in node.decorator_list} & COMPILED:
                 continue
             for call in ast.walk(node):
                 if not isinstance(call, ast.Call):
                     continue
-                f = call.func
-                if isinstance(f, ast.Name):
-                    target = bound.get(f.id, (module, f.id))
-                elif isinstance(f, ast.Attribute) and isinstance(f.value, ast.Name):
-                    source, name = bound.get(f.value.id, ("", "?"))
-                    target = (source, f.attr) if not name else ("", "")
+                head, _, rest = ast.unparse(call.func).partition(".")
+                if head in imports[module]:
+                    target = imports[module][head]
+                elif head in local:
+                    target = f"{module}.{head}"
                 else:
                     continue
-                if target in costly:
-                    offenders.append(f"{path.relative_to(root)}:{call.lineno} {node.name}")
+                if resolve(".".join(filter(None, [target, rest]))) in costly:
+                    offenders.append(f"{module}:{call.lineno} {node.name}")
+    return costly, offenders
+
+
+def test_internal_compiled_code_calls_the_bare_kernels():
+    """flexarm's own compiled loops call the bare kernels of the internal modules, not
+    the checked public faces: inside compiled code a public name is an overload that
+    is not inlined, and one compiled with the refcount runtime pays an incref/decref
+    pair for each of the model's ~30 arrays at every call (the closed loop ran 1.5x
+    slower that way). The runtime-free overloads (``compiled_as(...,
+    runtime_free=True)``) are calls by design. A name is what the module imports it
+    as, followed through re-exports: a bare kernel may share its checked face's name."""
+    sources = {
+        _module_of(path): (ast.parse(path.read_text()), path.name == "__init__.py")
+        for path in ROOT.rglob("*.py")
+    }
+    costly, offenders = _costly_calls(sources)
+    assert {
+        "flexarm.sim.integrator.rk4_step",
+        "flexarm.sim.integrator.diverged",
+        "flexarm.sensing.channels.sense",
+        "flexarm.model.dynamics.point_kinematics",
+    } <= costly
     assert not offenders, offenders
 
 
-def test_the_guard_resolves_names_to_their_modules():
-    """The guard's resolution itself: a face imported by name, a module's attribute."""
-    tree = ast.parse(
-        "from ..sensing import _channels\nfrom ..sensing.channels import sense\n"
-        "from .integrator import rk4_step\n"
-    )
-    bound = _imports(tree, "flexarm.sim.loop", False)
-    assert bound["_channels"] == ("flexarm.sensing._channels", "")
-    assert bound["sense"] == ("flexarm.sensing.channels", "sense")
-    assert bound["rk4_step"] == ("flexarm.sim.integrator", "rk4_step")
+def test_the_guard_tells_a_checked_face_from_its_bare_kernel():
+    """The guard above reports a call of a public face, under its own name or a
+    module's, and not the bare kernel of the same name."""
+    sources = {
+        "flexarm.lib": (ast.parse("@compiled_as(face)\ndef _(x):\n    return None\n"), False),
+        "flexarm._bare": (ast.parse("def face(x):\n    return x\n"), False),
+        "flexarm.user": (
+            ast.parse(
+                "from . import lib\nfrom .lib import face\nfrom ._bare import face as bare\n"
+                "@nb.njit\ndef f(x):\n    face(x)\n    lib.face(x)\n    bare(x)\n"
+            ),
+            False,
+        ),
+    }
+    costly, offenders = _costly_calls(sources)
+    assert costly == {"flexarm.lib.face"}
+    assert offenders == ["flexarm.user:6 f", "flexarm.user:7 f"]

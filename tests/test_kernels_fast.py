@@ -17,11 +17,11 @@ import flexarm as fa
 from flexarm.model import dynamics
 from flexarm.model.joints import MakkarFriction, NonlinearJoint
 from flexarm.sim import integrator
+from helpers.arms import LINEAR_CLAMPED_FREE, random_state, two_short_links
 
 # The scalar kernel is the paper's structure without geometric stiffening; the arms
 # written for it before stiffening and clamped-mass became the defaults state the
-# model they test.
-LINEAR_CLAMPED_FREE = {"boundary": "clamped-free", "geometric_stiffening": False}
+# model they test (LINEAR_CLAMPED_FREE).
 
 TWO_BY_ONE = {
     "paper": lambda: fa.FlexibleArm.paper(),
@@ -37,13 +37,7 @@ TWO_BY_ONE = {
         payload_inertia=0.05,
         **LINEAR_CLAMPED_FREE,
     ),
-    "clamped-mass": lambda: fa.FlexibleArm(
-        [fa.Link(1.3, 4.0, 0.9, n_modes=1, hub_mass=0.3), fa.Link(0.9, 2.5, 0.5, n_modes=1)],
-        payload_mass=0.4,
-        payload_inertia=0.05,
-        boundary="clamped-mass",
-        geometric_stiffening=False,
-    ),
+    "clamped-mass": lambda: two_short_links(1, boundary="clamped-mass", geometric_stiffening=False),
     "payload-inertia-damped": lambda: fa.FlexibleArm(
         [fa.Link(1.3, 4.0, 0.9, n_modes=1), fa.Link(0.9, 2.5, 0.5, n_modes=1, modal_damping=0.1)],
         payload_inertia=0.05,
@@ -59,12 +53,7 @@ OTHERS = {
         **LINEAR_CLAMPED_FREE,
     ),
     # geometric stiffening takes the general kernel, also for two links with one mode
-    "stiffening-two-by-one": lambda: fa.FlexibleArm(
-        [fa.Link(1.3, 4.0, 0.9, n_modes=1, hub_mass=0.3), fa.Link(0.9, 2.5, 0.5, n_modes=1)],
-        payload_mass=0.4,
-        payload_inertia=0.05,
-        geometric_stiffening=True,
-    ),
+    "stiffening-two-by-one": lambda: two_short_links(1, geometric_stiffening=True),
     "stiffening-joints": lambda: fa.FlexibleArm(
         [fa.Link(1.0, 5.0, 1.1, n_modes=3), fa.Link(0.8, 2.0, 0.6, n_modes=2, hub_mass=0.5)],
         joints=[NonlinearJoint.default(MakkarFriction.default())] * 2,
@@ -75,23 +64,6 @@ OTHERS = {
         joints=[NonlinearJoint.default(MakkarFriction.default())] * 2
     ),
 }
-
-
-def random_state(arm: fa.FlexibleArm, rng: np.random.Generator):
-    """Angles in [-pi, pi], tip deflections ~ 0.1 L, rates ~ 1 rad/s and ~ L/s;
-    motor angles (if any) near their links."""
-    q = np.empty(arm.n_dof)
-    dq = rng.normal(size=arm.n_dof)
-    q[: arm.n_links] = rng.uniform(-np.pi, np.pi, arm.n_links)
-    for i, (lk, bm) in enumerate(zip(arm.links, arm.modes, strict=True)):
-        s = arm.modal_slice(i)
-        if lk.n_modes:
-            unit = lk.length / np.abs(bm.tip_deflection)
-            q[s] = rng.normal(size=lk.n_modes) * 0.1 * unit
-            dq[s] *= unit
-    if arm.has_flexible_joints:
-        q[arm.motor_slice] = q[: arm.n_links] + rng.normal(size=arm.n_links) * 0.05
-    return q, dq
 
 
 def _call(kernel, arm, q, dq, tau):

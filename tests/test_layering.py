@@ -38,10 +38,13 @@ RANK = {name: k for k, names in enumerate(LAYERS) for name in names}
 
 # Inside a package: a module may import the modules listed before it (or its own
 # package's __init__ when that is lower still). Packages not listed are unordered.
+# A sub-package is one entry of its parent's list; its own modules are ordered by
+# the entry of its dotted name ("model.dynamics"), if it has one.
 WITHIN: dict[str, list[str]] = {
     "model": [
         "validity",
-        "modes",
+        "_roots",
+        "beam",
         "link",
         "joints",
         "arrays",
@@ -52,17 +55,15 @@ WITHIN: dict[str, list[str]] = {
         "packing",
         "kinematics",
         "lagrangian",
-        "dynamics_foreshortening",
-        "dynamics_recursive",
-        "dynamics_points",
-        "dynamics_two_links",
-        "dynamics",
+        "dynamics",  # the compiled dynamics, a sub-package ordered below
+        "_buffer",
         "packed",
         "backends",
         "prescribed",
         "arm",
         "damped_modes",
     ],
+    "model.dynamics": ["_link_terms", "_dense", "_recursive", "_two_links", "_points", "_forward"],
     "sensing": ["delays", "sensors", "_channels", "channels", "instruments"],
     "control": [
         "options",
@@ -248,8 +249,15 @@ def test_no_upward_imports(path):
         ("sim.closed_loop", "model.dynamics", True),
         ("model.arm", "sim.loop", False),  # upward across packages
         ("model.arm", "fuzzy", False),  # peers of one layer
-        ("model.modes", "model.arm", False),  # upward inside a package
-        ("model.arm", "model.modes", True),
+        ("model.beam", "model.arm", False),  # upward inside a package
+        ("model.arm", "model.beam", True),
+        # inside a sub-package, and across its border
+        ("model.dynamics._forward", "model.dynamics._dense", True),
+        ("model.dynamics._dense", "model.dynamics._forward", False),
+        ("model.dynamics", "model.dynamics._forward", True),  # the package gathers it
+        ("model.packed", "model.dynamics._forward", True),
+        ("model.dynamics._dense", "model.packed", False),
+        ("model.dynamics._dense", "model.arrays", True),
         ("cli", "studies.reproduction", True),
         # ordered sub-packages: the innermost package holding both decides
         ("ident.hammerstein.white.lags", "ident.regression.estimators", True),

@@ -3,10 +3,10 @@
 Oracles used here (none of them calls the code under test):
 
 * published numbers: the cantilever roots 1.8751040687, 4.6940911330, ...
-  (spec §1; Blevins, *Formulas for Natural Frequency and Mode Shape*), the
+  (Blevins, *Formulas for Natural Frequency and Mode Shape*), the
   clamped beam with a tip mass equal to its own mass, ``beta_1 L = 1.24792``
-  (Blevins, beams with a tip mass), and the paper's ``omega_1 = 12.281 rad/s`` (spec §1);
-* the frequency equation of spec §1, *unscaled*, solved by :func:`mpmath.findroot`
+  (Blevins, beams with a tip mass), and the paper's ``omega_1 = 12.281 rad/s`` (Sec. III);
+* the clamped-mass frequency equation, *unscaled*, solved by :func:`mpmath.findroot`
   at 50 (or more) significant digits;
 * the textbook shapes ``cosh - cos - sigma (sinh - sin)`` evaluated in mpmath with
   enough digits to absorb the ``e**lam`` cancellation;
@@ -32,14 +32,14 @@ import scipy.special as sps
 from flexarm.modes import BeamModes, cantilever_roots, clamped_mass_roots
 
 PUBLISHED_ROOTS = (1.8751040687, 4.6940911330, 7.8547574382, 10.9955407349, 14.1371683910)
-L_ARM, EI_ARM, RHO_ARM = 4.5, 1676.0, 0.335  # spec §1, the paper's link
+L_ARM, EI_ARM, RHO_ARM = 4.5, 1676.0, 0.335  # the paper's link (Sec. III)
 RATIOS = (0.0, 0.1, 1.0, 10.0, 1e3, 1e6)
 DOCUMENTED_ROOT_RTOL = 1e-14  # clamped_mass_roots docstring: "accurate to about 1e-14 relative"
 
 
 # --------------------------------------------------------------------------- mpmath oracles
 def _freq_eq(lam, mu, j):
-    """Left side of the clamped-mass frequency equation of spec §1, unscaled (mpmath)."""
+    """Left side of the clamped-mass frequency equation, unscaled (mpmath)."""
     c, s, ch, sh = mp.cos(lam), mp.sin(lam), mp.cosh(lam), mp.sinh(lam)
     return (
         1
@@ -196,7 +196,7 @@ def test_cantilever_roots_match_published_values():
 def test_paper_arm_first_frequency():
     modes = BeamModes(L_ARM, EI_ARM, RHO_ARM, n_modes=1)
     assert modes.frequencies.shape == (1,)
-    # spec §1: 12.281 rad/s, i.e. 1.955 Hz (the paper's "Hz" is a typo).
+    # the paper's Sec. III: 12.281 rad/s, i.e. 1.955 Hz (the paper's "Hz" is a typo).
     assert abs(modes.frequencies[0] - 12.281) < 5e-4
     assert abs(modes.frequencies_hz[0] - 1.955) < 5e-4
     # and to full precision from the published root: omega = lam**2 sqrt(EI / (rho L**4)).
@@ -649,36 +649,32 @@ def test_mass_normalisation_generalised_mass_is_identity(mu, j):
     np.testing.assert_allclose(gm, np.eye(n), rtol=0, atol=1e-12)
 
 
-@pytest.mark.parametrize("n", [1, 5, 20, 50])
-def test_modal_stiffness_cantilever(n):
-    modes = BeamModes(L_ARM, EI_ARM, RHO_ARM, n_modes=n)
-    lam = np.array([float(_mp_cantilever_root(k)) for k in range(1, n + 1)])
+def assert_stiffness_is_omega_squared(modes, lam):
+    """The modal stiffness, exact and by quadrature, is ``diag(omega**2)`` with
+    ``omega = lam**2 sqrt(EI / (rho L**4))`` from the independent roots ``lam``."""
+    n = lam.shape[0]
     w2 = lam**4 * EI_ARM / (RHO_ARM * L_ARM**4)
     scale = np.sqrt(np.outer(w2, w2))
     np.testing.assert_allclose(modes.modal_stiffness / scale, np.eye(n), rtol=0, atol=1e-12)
     np.testing.assert_allclose(
         modes.stiffness_by_quadrature() / scale, np.eye(n), rtol=0, atol=1e-11
     )
+
+
+@pytest.mark.parametrize("n", [1, 5, 20, 50])
+def test_modal_stiffness_cantilever(n):
+    modes = BeamModes(L_ARM, EI_ARM, RHO_ARM, n_modes=n)
+    lam = np.array([float(_mp_cantilever_root(k)) for k in range(1, n + 1)])
+    assert_stiffness_is_omega_squared(modes, lam)
 
 
 @pytest.mark.parametrize(("mu", "j"), [(0.5, 0.0), (2.0, 0.3), (10.0, 1.0)])
 def test_modal_stiffness_clamped_mass(mu, j):
     n = 10
-    modes = BeamModes(
-        L_ARM,
-        EI_ARM,
-        RHO_ARM,
-        n_modes=n,
-        tip_mass=mu * RHO_ARM * L_ARM,
-        tip_inertia=j * RHO_ARM * L_ARM**3,
-    )
+    tips = {"tip_mass": mu * RHO_ARM * L_ARM, "tip_inertia": j * RHO_ARM * L_ARM**3}
+    modes = BeamModes(L_ARM, EI_ARM, RHO_ARM, n_modes=n, **tips)
     lam = np.array([float(r) for r in _mp_clamped_mass_roots(n, mu, j)])
-    w2 = lam**4 * EI_ARM / (RHO_ARM * L_ARM**4)
-    scale = np.sqrt(np.outer(w2, w2))
-    np.testing.assert_allclose(modes.modal_stiffness / scale, np.eye(n), rtol=0, atol=1e-12)
-    np.testing.assert_allclose(
-        modes.stiffness_by_quadrature() / scale, np.eye(n), rtol=0, atol=1e-11
-    )
+    assert_stiffness_is_omega_squared(modes, lam)
 
 
 @pytest.mark.parametrize(("mu", "j"), [(0.0, 0.0), (0.5, 0.0), (2.0, 0.3)])
@@ -807,14 +803,14 @@ def test_the_roots_kept_per_process_are_the_computed_ones_and_yours_to_change():
     """Small root sets are kept once per process (a sweep builds the same links again
     and again): each call still returns its own writable array, equal to a fresh
     computation; large sets are computed each time."""
-    from flexarm.model import modes
+    from flexarm.model import _roots
 
     first = clamped_mass_roots(5, 0.3, 0.01)
     first[:] = -1.0  # the caller's own copy
     again = clamped_mass_roots(5, 0.3, 0.01)
-    assert np.array_equal(again, modes._roots(5, 0.3, 0.01)) and np.all(again > 0)
-    big = modes._CACHED_UP_TO + 1
-    np.testing.assert_array_equal(clamped_mass_roots(big, 0.3), modes._roots(big, 0.3, 0.0))
+    assert np.array_equal(again, _roots.roots(5, 0.3, 0.01)) and np.all(again > 0)
+    big = _roots.CACHED_UP_TO + 1
+    np.testing.assert_array_equal(clamped_mass_roots(big, 0.3), _roots.roots(big, 0.3, 0.0))
     small, large = (BeamModes(2.0, 1676.0, 0.335, n_modes=m) for m in (5, big))
     # the kept rule (5 modes) and one computed afresh (65 modes; more nodes): both exact
     np.testing.assert_allclose(small.mass_integral, large.mass_integral[:5], rtol=1e-12)

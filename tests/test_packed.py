@@ -21,8 +21,9 @@ from hypothesis import strategies as st
 import flexarm as fa
 from flexarm.errors import InvalidTypeError, InvalidValueError
 from flexarm.model import dynamics
+from flexarm.model._buffer import scratch_size, unpacked, workspace
 from flexarm.model.arrays import make_workspace, workspace_shapes, workspace_size
-from flexarm.model.packed import _scratch_size, _unpacked, _workspace
+from helpers.arms import random_states, three_links
 
 L, EI, RHO = 4.5, 1676.0, 0.335
 JOINT = fa.NonlinearJoint.default(fa.MakkarFriction.default())
@@ -32,15 +33,7 @@ ARMS = {
     "rigid": lambda: fa.FlexibleArm([fa.Link(L, EI, RHO, n_modes=0)] * 2),
     "paper-2modes": lambda: fa.FlexibleArm.paper(n_modes=2),
     "one-link-default": lambda: fa.FlexibleArm([fa.Link(L, EI, RHO)]),
-    "three-links-stiffening": lambda: fa.FlexibleArm(
-        [
-            fa.Link(1.0, 5.0, 1.1, n_modes=2, hub_inertia=0.2),
-            fa.Link(0.8, 2.0, 0.6, n_modes=0, hub_mass=0.5, hub_inertia=0.03),
-            fa.Link(0.6, 1.5, 0.4, n_modes=3, hub_mass=0.2, hub_inertia=0.01),
-        ],
-        payload_mass=0.3,
-        payload_inertia=0.02,
-    ),
+    "three-links-stiffening": three_links,
     "paper-joints": lambda: fa.FlexibleArm.paper(joints=[JOINT, JOINT]),
     "joints-motor-friction-stiffening": lambda: fa.FlexibleArm(
         [fa.Link(L, EI, RHO, n_modes=2, hub_mass=1.0)] * 2,
@@ -63,23 +56,8 @@ def arm(request):
 
 
 def states(arm: fa.FlexibleArm, m: int, seed: int = 7):
-    """``m`` random states: angles in [-pi, pi], rates ~1 rad/s, tip deflections of a
-    few per cent of the link, motors near their links, torques ~5 N m."""
-    rng = np.random.default_rng(seed)
-    n, nl = arm.n_dof, arm.n_links
-    q = np.empty((m, n))
-    dq = rng.normal(size=(m, n))
-    q[:, :nl] = rng.uniform(-np.pi, np.pi, (m, nl))
-    for i, (lk, bm) in enumerate(zip(arm.links, arm.modes, strict=True)):
-        if lk.n_modes:
-            unit = lk.length / np.abs(bm.tip_deflection)
-            s = arm.modal_slice(i)
-            q[:, s] = rng.normal(size=(m, lk.n_modes)) * 0.03 * unit
-            dq[:, s] *= 0.3 * unit
-    if arm.has_flexible_joints:
-        q[:, arm.motor_slice] = q[:, :nl] + rng.uniform(-2e-3, 2e-3, (m, nl))
-    tau = rng.uniform(-5.0, 5.0, (m, nl))
-    return q, dq, tau
+    """``m`` random states (tip deflections of 3 % of the link) and torques."""
+    return random_states(arm, m, seed)
 
 
 def kernel(arm, q, dq, tau):
@@ -97,7 +75,7 @@ def close(a, b, tol=1e-12):
 
 # --------------------------------------------------------------- the same numbers
 def test_the_buffer_unpacks_to_the_arms_arrays(arm):
-    got = _unpacked(arm._packed().buf)
+    got = unpacked(arm._packed().buf)
     for name in arm.arrays._fields:
         want = getattr(arm.arrays, name)
         assert getattr(got, name).dtype == want.dtype, name
@@ -106,7 +84,7 @@ def test_the_buffer_unpacks_to_the_arms_arrays(arm):
 
 @nb.njit
 def _workspace_shapes(wbuf, n):  # pragma: no cover - compiled
-    ws = _workspace(wbuf, n, wbuf[: n * n].reshape((n, n)))
+    ws = workspace(wbuf, n, wbuf[: n * n].reshape((n, n)))
     return (
         ws.bias.shape,
         ws.jac.shape,
@@ -432,7 +410,7 @@ _PROPERTY_ARM = ARMS["three-links-stiffening"]()
 
 @nb.njit
 def _scratch_sizes(top):  # pragma: no cover - compiled
-    return [_scratch_size(n) for n in range(1, top)]
+    return [scratch_size(n) for n in range(1, top)]
 
 
 def test_the_compiled_workspace_size_is_workspace_size():

@@ -19,7 +19,7 @@ from flexarm.cli._common import number
 from flexarm.control.controllers import JacobianTransposePD, JointPD
 from flexarm.control.trajectories import Circle, Square
 from flexarm.errors import FlexarmError, InvalidTypeError, InvalidValueError
-from flexarm.model.modes import BeamModes
+from flexarm.model.beam import BeamModes
 from flexarm.sensing.sensors import JointSensor, PointSensor, parse_sensor
 from flexarm.sim.results import SimulationError
 from flexarm.sim.scenario import Scenario

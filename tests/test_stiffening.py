@@ -31,8 +31,8 @@ import flexarm as fa
 from flexarm.errors import InvalidTypeError, InvalidValueError
 from flexarm.model import dynamics
 from flexarm.model.arrays import pack_arm_arrays
+from flexarm.model.beam import BeamModes
 from flexarm.model.foreshortening import foreshortening_integrals, shortening_matrix
-from flexarm.model.modes import BeamModes
 from flexarm.model.prescribed import prescribed_accelerations, prescribed_dynamics
 from flexarm.sim import SimulationError
 from flexarm.sim.prescribed import simulate_prescribed

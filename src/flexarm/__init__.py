@@ -46,7 +46,7 @@ _SUBPACKAGES = (
     "sweeps",
 )
 _NAMES = {
-    "BeamModes": "model.modes",
+    "BeamModes": "model.beam",
     "FlexibleArm": "model.arm",
     "LinearJoint": "model.joints",
     "Link": "model.link",
@@ -69,6 +69,7 @@ __all__ += ["__version__"]
 if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run time
     from .calibration.result import calibrate as calibrate
     from .model.arm import FlexibleArm as FlexibleArm
+    from .model.beam import BeamModes as BeamModes
     from .model.joints import (
         LinearJoint as LinearJoint,
     )
@@ -79,7 +80,6 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run
         NonlinearJoint as NonlinearJoint,
     )
     from .model.link import Link as Link
-    from .model.modes import BeamModes as BeamModes
     from .sim.batch import simulate_many as simulate_many
     from .sim.closed_loop import simulate as simulate
     from .sim.open_loop import simulate_open_loop as simulate_open_loop

@@ -47,13 +47,16 @@ def compiled_as(public: Callable[..., Any], *, runtime_free: bool = False) -> Ca
     the kernel into a user's function in about a second instead of re-optimising it
     there for ten).
 
-    The pattern of flexarm's public kernels: ``public`` is a Python function that
-    checks its arguments and calls a private ``@njit`` kernel; the decorated
-    function returns that kernel for compiled callers, who get it unchecked::
+    The pattern of flexarm's public kernels: ``public`` is a Python function (the
+    checked face) that checks its arguments and calls the bare ``@njit`` kernel of an
+    internal module; the decorated function returns that kernel for compiled
+    callers, who get it unchecked::
 
         @compiled_as(forward_dynamics)
         def _(q, dq, tau, model, ws, ddq):
-            return lambda q, dq, tau, model, ws, ddq: _forward_dynamics(q, dq, tau, model, ws, ddq)
+            return lambda q, dq, tau, model, ws, ddq: _forward.forward_dynamics(
+                q, dq, tau, model, ws, ddq
+            )
 
     With ``runtime_free`` the implementation is compiled without the refcount
     runtime (:func:`njit_runtime_free`; for kernels that allocate nothing): its

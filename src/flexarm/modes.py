@@ -1,14 +1,14 @@
-"""Beam modes under the name the public API contract gives them (``flexarm.modes``).
+"""Beam modes under their public name, ``flexarm.modes``.
 
-The implementation lives in :mod:`flexarm.model.modes`, beside the rest of the
-plant model; this module is the stable public entry point that
-``../shared/spec/api.md`` promises (``cantilever_roots``, ``clamped_mass_roots``,
-``BeamModes``), so that ``from flexarm.modes import BeamModes`` keeps working.
+The implementation lives in :mod:`flexarm.model.beam`, beside the rest of the
+plant model; this module is the stable public entry point promised to users
+(``cantilever_roots``, ``clamped_mass_roots``, ``BeamModes``), so that
+``from flexarm.modes import BeamModes`` keeps working.
 """
 
 from __future__ import annotations
 
-from .model.modes import (
+from .model.beam import (
     NORMALIZATIONS,
     BeamModes,
     cantilever_roots,

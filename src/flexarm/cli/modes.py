@@ -9,8 +9,8 @@ from typing import Any
 import numpy as np
 
 from ..model.arm import BOUNDARIES, FlexibleArm
+from ..model.beam import NORMALIZATIONS, BeamModes
 from ..model.joints import LinearJoint, MakkarFriction, NonlinearJoint
-from ..model.modes import NORMALIZATIONS, BeamModes
 from ._common import UsageError, number
 
 __all__ = ["add_parser"]

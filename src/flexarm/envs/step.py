@@ -36,8 +36,8 @@ from numpy.typing import NDArray
 
 from .._compile import njit_runtime_free
 from ..model.arrays import ArmArrays, Workspace
-from ..model.dynamics_points import _point_kinematics
-from ..model.dynamics_two_links import _is_two_links_one_mode
+from ..model.dynamics._points import point_kinematics
+from ..model.dynamics._two_links import is_two_links_one_mode
 from ..sensing import _channels
 from ..sensing.channels import SensorArrays
 from ..sim import _rk4
@@ -177,7 +177,7 @@ def _observe(
         elif obs[c] > env.high[c]:
             obs[c] = env.high[c]
     last = n_links - 1
-    _point_kinematics(q, dq, model, last, model.link[last, 0], env.tip_phi, point)
+    point_kinematics(q, dq, model, last, model.link[last, 0], env.tip_phi, point)
     state.error[i] = math.hypot(point[0] - env.target[k, 0], point[1] - env.target[k, 1])
 
 
@@ -234,7 +234,7 @@ def step_batch(
     sig = scratch.signals
     raw = sig[0:n_ch]
     x_new = sig[2 * n_ch : sig.shape[0] - 4]
-    two_links_one_mode = _is_two_links_one_mode(model)
+    two_links_one_mode = is_two_links_one_mode(model)
     for i in range(i0, i1):
         if not active[i]:
             continue

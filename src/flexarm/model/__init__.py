@@ -1,6 +1,7 @@
 """The plant: beam modes, links, joints, the arm and its compiled dynamics.
 
-* :mod:`~flexarm.model.modes` — Euler–Bernoulli assumed modes (clamped-free, clamped-mass);
+* :mod:`~flexarm.model.beam` — Euler–Bernoulli assumed modes (clamped-free, clamped-mass),
+  public as :mod:`flexarm.modes` too;
 * :mod:`~flexarm.model.link`, :mod:`~flexarm.model.joints` — link and joint parameters;
 * :mod:`~flexarm.model.arm` — :class:`FlexibleArm`, the NumPy reference of the dynamics;
 * :mod:`~flexarm.model.kinematics`, :mod:`~flexarm.model.lagrangian` — its kinematics and
@@ -9,8 +10,9 @@
 * :mod:`~flexarm.model.prescribed` — the arm with its joint motion prescribed;
 * :mod:`~flexarm.model.validity` — what the model choices leave out, measured;
 * :mod:`~flexarm.model.arrays`, :mod:`~flexarm.model.dynamics` — the arm packed as plain
-  arrays and the compiled kernels that read them (for your own Numba loops), the
-  recursive (articulated-body) one in :mod:`~flexarm.model.dynamics_recursive`;
+  arrays and the compiled kernels that read them (for your own Numba loops): the
+  dense, the recursive (articulated-body) and the paper's scalar forward dynamics,
+  the mass matrix, the kinematics of a point;
 * :mod:`~flexarm.model.packed`, :mod:`~flexarm.model.backends` — the kernels behind
   cheap calls from Python (one packed buffer per arm), and which backend a public call
   of the arm takes;
@@ -26,38 +28,38 @@ from .._lazy import attach
 _SUBMODULES = (
     "arm",
     "arrays",
+    "beam",
     "dynamics",
     "foreshortening",
     "joints",
     "kinematics",
     "lagrangian",
     "link",
-    "modes",
     "plant",
     "prescribed",
     "validity",
 )
 _NAMES = {
-    "BeamModes": "modes",
+    "BeamModes": "beam",
     "FlexibleArm": "arm",
     "LinearJoint": "joints",
     "Link": "link",
     "MakkarFriction": "joints",
     "NonlinearJoint": "joints",
     "Plant": "plant",
-    "cantilever_roots": "modes",
-    "clamped_mass_roots": "modes",
+    "cantilever_roots": "beam",
+    "clamped_mass_roots": "beam",
 }
 
 __getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
 
 if TYPE_CHECKING:  # what type checkers see; nothing is imported at run time
     from .arm import FlexibleArm as FlexibleArm
+    from .beam import BeamModes as BeamModes
+    from .beam import cantilever_roots as cantilever_roots
+    from .beam import clamped_mass_roots as clamped_mass_roots
     from .joints import LinearJoint as LinearJoint
     from .joints import MakkarFriction as MakkarFriction
     from .joints import NonlinearJoint as NonlinearJoint
     from .link import Link as Link
-    from .modes import BeamModes as BeamModes
-    from .modes import cantilever_roots as cantilever_roots
-    from .modes import clamped_mass_roots as clamped_mass_roots
     from .plant import Plant as Plant

@@ -87,12 +87,12 @@ from .._validation import (
 from ..errors import InvalidTypeError, InvalidValueError
 from .arrays import ArmArrays
 from .backends import Backends
+from .beam import NORMALIZATIONS, BeamModes
 from .foreshortening import shortening_matrix
 from .joints import LinearJoint, NonlinearJoint
 from .kinematics import RigidKinematics, deflected_point
 from .lagrangian import body_terms, christoffel_matrix, mass_matrix_derivatives
 from .link import Link
-from .modes import NORMALIZATIONS, BeamModes
 from .packing import outboard_loads, pack
 from .validity import PAPER_DEFLECTION_ERROR, PAPER_MODEL_NOTE
 

@@ -84,7 +84,7 @@ AX_BETA = 5  # added to beta_ux, beta_uy, beta_alpha
 AX_BETA_MODES = 6  # added to beta_delta
 AX_ROWS = 7
 AX_Q = AX_ROWS  # then K rows of Q, K rows of R, K rows of Q~ (K = n_dof)
-# Columns of Workspace.chain, the recursive algorithm's records (flexarm.model.dynamics_recursive).
+# Columns of Workspace.chain, the recursive algorithm's records (flexarm.model.dynamics).
 # Row i < n_links (joint i) holds link i's; row g of a modal coordinate holds that mode's.
 CH_AD = 0  # absolute angular rate of link i, rad/s
 CH_COS, CH_SIN = 1, 2  # cos, sin of the angle from link i-1's frame to link i's
@@ -164,7 +164,7 @@ class Workspace(NamedTuple):
     ``mass`` and ``bias`` hold :func:`mass_and_bias`'s results in the order of
     ``q``; the other arrays are scratch of the solvers: the dense one works in
     the link-major order of :func:`local_order`, the recursive one
-    (:mod:`flexarm.model.dynamics_recursive`) keeps its records in ``chain``
+    (:func:`flexarm.model.dynamics.forward_dynamics_recursive`) keeps its records in ``chain``
     and each link's modal block in ``lmass``.
     """
 

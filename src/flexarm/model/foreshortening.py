@@ -43,7 +43,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array
 from ..errors import InvalidValueError
-from .modes import BeamModes
+from .beam import BeamModes
 
 __all__ = ["Foreshortening", "foreshortening_integrals", "shortening_matrix"]
 

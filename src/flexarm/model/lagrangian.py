@@ -12,13 +12,14 @@ hold the two together (and both against an independent SymPy derivation).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .arrays import ArmArrays
+from .packing import ArmParameters
 
 __all__ = [
     "Body",
@@ -33,37 +34,13 @@ Body = tuple[NDArray[Any], NDArray[Any], NDArray[Any] | None]
 force at ``qddot = 0`` (k,) or None."""
 
 
-class _Joint(Protocol):
-    @property
-    def motor_inertia(self) -> float: ...
-
-
-class _Link(Protocol):
-    @property
-    def hub_mass(self) -> float: ...
-
-
-class LagrangianArm(Protocol):
+class LagrangianArm(ArmParameters, Protocol):
     """What :func:`body_terms` reads of an arm (:class:`flexarm.FlexibleArm`)."""
 
     @property
-    def n_dof(self) -> int: ...
-    @property
-    def n_links(self) -> int: ...
-    @property
     def arrays(self) -> ArmArrays: ...
     @property
-    def links(self) -> Sequence[_Link]: ...
-    @property
-    def joints(self) -> Sequence[_Joint] | None: ...
-    @property
-    def rotor_coupling(self) -> bool: ...
-    @property
     def motor_slice(self) -> slice: ...
-    @property
-    def payload_mass(self) -> float: ...
-    @property
-    def payload_inertia(self) -> float: ...
 
     def modal_slice(self, link: int) -> slice: ...
 

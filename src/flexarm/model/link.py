@@ -4,13 +4,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .._validation import check_int, validate_real_fields
+from .._validation import validate_real_fields
+from .beam import UniformBeam
 
 __all__ = ["Link"]
 
 
 @dataclass(frozen=True)
-class Link:
+class Link(UniformBeam):
     """A uniform Euler–Bernoulli link driven at its base joint.
 
     Parameters
@@ -46,27 +47,14 @@ class Link:
     1.5075
     """
 
-    length: float
-    flexural_rigidity: float
-    linear_density: float
     n_modes: int = 3
     hub_mass: float = 0.0
     hub_inertia: float = 0.0
     modal_damping: float = 0.0
 
     def __post_init__(self) -> None:
-        validate_real_fields(
-            self,
-            "Link",
-            positive=("length", "flexural_rigidity", "linear_density"),
-            nonnegative=("hub_mass", "hub_inertia", "modal_damping"),
-        )
-        object.__setattr__(self, "n_modes", check_int(self.n_modes, "n_modes", "Link", minimum=0))
-
-    @property
-    def mass(self) -> float:
-        """Beam mass ``rho L`` in kg (hub excluded)."""
-        return self.linear_density * self.length
+        super().__post_init__()
+        validate_real_fields(self, "Link", nonnegative=("hub_mass", "hub_inertia", "modal_damping"))
 
     @property
     def rod_inertia(self) -> float:

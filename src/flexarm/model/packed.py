@@ -34,285 +34,44 @@ lock. The kernels write every scratch value before reading it.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
-import numba as nb
 import numpy as np
 from numba import types as nt
-from numba.core import cgutils
-from numba.core.imputils import impl_ret_borrowed
-from numba.extending import intrinsic
-from numba.np.arrayobj import make_array, populate_array
 from numpy.typing import NDArray
 
 from .._compile import njit_runtime_free
 from ..errors import InvalidValueError
-from .arrays import (
-    AX_ROWS,
-    LEN,
-    N_CHAIN_COLUMNS,
-    N_JOINT_COLUMNS,
-    N_LINK_COLUMNS,
-    ArmArrays,
-    Workspace,
-    workspace_size,
+from ._buffer import (
+    OK,
+    own_mass,
+    pack_buffer,
+    rows_status,
+    scratch,
+    scratch_size,
+    sizes,
+    state_status,
+    states_status,
+    unpack,
+    vector_status,
+    view,
+    workspace,
 )
-from .dynamics import _forward_dynamics, _mass_and_bias
-from .dynamics_points import _point_state
+from .arrays import LEN, ArmArrays, workspace_size
+from .dynamics._dense import mass_and_bias
+from .dynamics._forward import forward_dynamics
+from .dynamics._points import point_state
 from .kernel_checks import shape_message, state_shapes
 
 __all__ = ["STACK_FLOATS", "PackedArm", "pack_buffer"]
 
 F64 = NDArray[np.float64]
 
-_HEADER = 4  # n_links, n_dof, n_joints, K; then mode_start (n_links + 1), all int64
 _OWNER = "FlexibleArm"
 _STATE = ("q", "dq", "tau")
-_NDARRAY = np.ndarray
 _FLOAT64 = np.dtype(np.float64)
 _empty = np.empty  # a name lookup less than np.empty: 30 ns of a call of ~600
-
-# Status codes of the entry points: 0 is success; otherwise 1 + 2 k + kind for
-# argument k of _STATE, kind 0 a wrong shape, 1 a non-finite entry.
-_OK = 0
-
-
-def pack_buffer(arrays: ArmArrays) -> F64:
-    """``arrays`` as one float64 buffer.
-
-    Parameters
-    ----------
-    arrays : ArmArrays
-        :attr:`flexarm.FlexibleArm.arrays`.
-
-    Returns
-    -------
-    ndarray, shape (5 + n_links + size,)
-        ``n_links, n_dof, n_joints, K`` (the most modes of a link with geometric
-        stiffening) and ``mode_start`` as int64 bit patterns, then every float
-        array of ``arrays`` raveled in field order. Writable (Numba takes
-        writable arrays fastest), but never written.
-    """
-    n_links = arrays.mode_start.shape[0] - 1
-    n = arrays.mass_integral.shape[0]
-    header = [n_links, n, arrays.joint.shape[0], arrays.shortening_cubic.shape[-1]]
-    ints = np.concatenate([np.array(header, dtype=np.int64), arrays.mode_start])
-    floats = [np.ravel(getattr(arrays, f)) for f in ArmArrays._fields[1:]]
-    return np.concatenate([ints.astype(np.int64).view(np.float64), *floats])
-
-
-# ---------------------------------------------------------------- views, compiled
-def _view_typing(typingctx, buf, offset, shape, dtype):  # type: ignore[no-untyped-def]
-    """The typing and code of :func:`_view`: ``buf[offset:]`` viewed as a
-    C-contiguous array of ``shape`` and ``dtype`` (``np.float64`` or
-    ``np.int64``), unchecked: a view built in a few
-    instructions where ``buf[a:b].reshape(shape)`` calls a checking helper (some
-    12 ns a view, a third of a call of the paper's arm from Python). The caller
-    guarantees that ``buf`` holds ``offset + prod(shape)`` items of 8 bytes."""
-    ndim, item = len(shape), dtype.dtype
-    retty = nt.Array(item, ndim, "C")
-
-    def codegen(context, builder, sig, args):  # type: ignore[no-untyped-def]
-        buf_v, offset_v, shape_v, _ = args
-        src = make_array(sig.args[0])(context, builder, buf_v)  # type: ignore[no-untyped-call]
-        dst = make_array(retty)(context, builder)  # type: ignore[no-untyped-call]
-        intp = context.get_value_type(nt.intp)
-        dims = [
-            builder.sext(d, intp) if d.type.width < intp.width else d
-            for d in cgutils.unpack_tuple(builder, shape_v, ndim)  # type: ignore[no-untyped-call]
-        ]
-        itemsize = context.get_abi_sizeof(context.get_data_type(item))
-        strides: list[Any] = []
-        step = context.get_constant(nt.intp, itemsize)
-        for d in reversed(dims):
-            strides.insert(0, step)
-            step = builder.mul(step, d)
-        data = builder.gep(src.data, [offset_v])
-        data = builder.bitcast(data, context.get_data_type(item).as_pointer())
-        itemsize_v = context.get_constant(nt.intp, itemsize)
-        populate_array(  # type: ignore[no-untyped-call]
-            dst, data=data, shape=dims, strides=strides, itemsize=itemsize_v, meminfo=src.meminfo
-        )
-        return impl_ret_borrowed(context, builder, retty, dst._getvalue())  # type: ignore[no-untyped-call]
-
-    return retty(buf, offset, shape, dtype), codegen
-
-
-_view: Any = intrinsic(_view_typing)
-
-
-@nb.njit(inline="always")
-def _unpack(buf: F64) -> ArmArrays:  # pragma: no cover - compiled
-    """The :class:`ArmArrays` that :func:`pack_buffer` packed, as views of ``buf``."""
-    n_links = _view(buf, 0, (1,), np.int64)[0]
-    o = _HEADER + n_links + 1
-    ints = _view(buf, 0, (o,), np.int64)
-    n, n_joints, k = ints[1], ints[2], ints[3]
-    ms = _view(buf, _HEADER, (n_links + 1,), np.int64)
-    link = _view(buf, o, (n_links, N_LINK_COLUMNS), np.float64)
-    o += n_links * N_LINK_COLUMNS
-    vectors = _view(buf, o, (4, n), np.float64)  # the four modal integrals
-    o += 4 * n
-    modal_mass = _view(buf, o, (n, n), np.float64)
-    o += n * n
-    stiffness = _view(buf, o, (n,), np.float64)
-    damping = _view(buf, o + n, (n,), np.float64)
-    payload = _view(buf, o + 2 * n, (2,), np.float64)
-    o += 2 * n + 2
-    joint = _view(buf, o, (n_joints, N_JOINT_COLUMNS), np.float64)
-    o += n_joints * N_JOINT_COLUMNS
-    shortening = _view(buf, o, (3, n, n), np.float64)  # tip, mass, moment
-    o += 3 * n * n
-    shortening_cubic = _view(buf, o, (n, k, k), np.float64)
-    o += n * k * k
-    shortening_quartic = _view(buf, o, (n, k, k, k), np.float64)
-    return ArmArrays(
-        mode_start=ms,
-        link=link,
-        mass_integral=vectors[0],
-        moment_integral=vectors[1],
-        tip_deflection=vectors[2],
-        tip_slope=vectors[3],
-        modal_mass=modal_mass,
-        stiffness=stiffness,
-        damping=damping,
-        payload=payload,
-        joint=joint,
-        shortening_tip=shortening[0],
-        shortening_mass=shortening[1],
-        shortening_moment=shortening[2],
-        shortening_cubic=shortening_cubic,
-        shortening_quartic=shortening_quartic,
-    )
-
-
-@nb.njit(inline="always")
-def _sizes(buf: F64) -> tuple[int, int]:  # pragma: no cover - compiled
-    """``(n_links, n_dof)`` of the packed arm."""
-    ints = _view(buf, 0, (2,), np.int64)
-    return ints[0], ints[1]
-
-
-@nb.njit(inline="always")
-def _workspace(wbuf: F64, n: int, mass: F64) -> Workspace:  # pragma: no cover - compiled
-    """``wbuf`` viewed as the :class:`Workspace` of :func:`flexarm.model.arrays.make_workspace`
-    (the layout of :func:`flexarm.model.arrays.workspace_shapes`), with ``mass``
-    (n, n) in place of its first array."""
-    o = n * n
-    bias = _view(wbuf, o, (n,), np.float64)
-    o += n
-    jac = _view(wbuf, o, (2, n), np.float64)
-    o += 2 * n
-    angle = _view(wbuf, o, (n,), np.float64)
-    o += n
-    rhs = _view(wbuf, o, (n,), np.float64)
-    o += n
-    rows = _view(wbuf, o, (3, n), np.float64)
-    o += 3 * n
-    lmass = _view(wbuf, o, (n, n), np.float64)
-    o += n * n
-    lbias = _view(wbuf, o, (n,), np.float64)
-    o += n
-    inv_diag = _view(wbuf, o, (n,), np.float64)
-    o += n
-    axial = _view(wbuf, o, (AX_ROWS + 3 * n, max(n, 3)), np.float64)
-    o += (AX_ROWS + 3 * n) * max(n, 3)
-    chain = _view(wbuf, o, (n, N_CHAIN_COLUMNS), np.float64)
-    return Workspace(
-        mass=mass,
-        bias=bias,
-        jac=jac,
-        angle=angle,
-        rhs=rhs,
-        rows=rows,
-        lmass=lmass,
-        lbias=lbias,
-        inv_diag=inv_diag,
-        axial=axial,
-        chain=chain,
-    )
-
-
-@nb.njit(inline="always")
-def _own_mass(wbuf: F64, n: int) -> F64:  # pragma: no cover - compiled
-    """The first ``n * n`` values of ``wbuf``: the workspace's own ``mass`` (n, n)."""
-    mass: F64 = _view(wbuf, 0, (n, n), np.float64)
-    return mass
-
-
-@nb.njit(inline="always")
-def _check(x: F64, n: int, arg: int) -> int:  # pragma: no cover - compiled
-    """Status of one vector argument: shape ``(n,)`` and finite entries."""
-    if x.shape[0] != n:
-        return 1 + 2 * arg
-    for r in range(n):
-        if not math.isfinite(x[r]):
-            return 2 + 2 * arg
-    return _OK
-
-
-@nb.njit(inline="always")
-def _check_rows(x: F64, m: int, n: int, arg: int) -> int:  # pragma: no cover - compiled
-    """Status of one batch argument: shape ``(m, n)`` and finite entries."""
-    if x.shape[0] != m or x.shape[1] != n:
-        return 1 + 2 * arg
-    for b in range(m):
-        for r in range(n):
-            if not math.isfinite(x[b, r]):
-                return 2 + 2 * arg
-    return _OK
-
-
-@nb.njit(inline="always")
-def _check_state(q: F64, dq: F64, tau: F64, buf: F64) -> int:  # pragma: no cover - compiled
-    """Status of a state: ``q, dq`` of shape (n_dof,), ``tau`` (n_links,), finite."""
-    n_links, n = _sizes(buf)
-    status = _check(q, n, 0)
-    if status == _OK:
-        status = _check(dq, n, 1)
-    if status == _OK:
-        status = _check(tau, n_links, 2)
-    return status
-
-
-@nb.njit(inline="always")
-def _check_states(q: F64, dq: F64, tau: F64, buf: F64) -> int:  # pragma: no cover - compiled
-    """:func:`_check_state` for a batch: ``(m, n_dof)``, ``(m, n_dof)``, ``(m, n_links)``."""
-    n_links, n = _sizes(buf)
-    m = q.shape[0]
-    status = _check_rows(q, m, n, 0)
-    if status == _OK:
-        status = _check_rows(dq, m, n, 1)
-    if status == _OK:
-        status = _check_rows(tau, m, n_links, 2)
-    return status
-
-
-# --------------------------------------------------------------- entry points
-def _stack_typing(typingctx, size):  # type: ignore[no-untyped-def]
-    """The typing and code of :func:`_stack`: ``size`` float64 values on the stack of
-    the compiled function that calls it (a dynamic ``alloca``), uninitialised,
-    freed when that function returns. Only for the entry points below, called
-    once a call and never inlined into a loop; ``size`` at most
-    :data:`STACK_FLOATS`."""
-    retty = nt.Array(nt.float64, 1, "C")
-
-    def codegen(context, builder, sig, args):  # type: ignore[no-untyped-def]
-        (n,) = args
-        data = builder.alloca(context.get_data_type(nt.float64), size=n)
-        arr = make_array(retty)(context, builder)  # type: ignore[no-untyped-call]
-        eight = context.get_constant(nt.intp, 8)
-        populate_array(  # type: ignore[no-untyped-call]
-            arr, data=data, shape=[n], strides=[eight], itemsize=eight, meminfo=None
-        )
-        return arr._getvalue()
-
-    return retty(size), codegen
-
-
-_stack: Any = intrinsic(_stack_typing)
 
 STACK_FLOATS = 2048
 """Workspaces up to this many float64 values (16 KiB: arms of up to 17 coordinates)
@@ -320,28 +79,12 @@ live on the stack of a call, half the smallest thread stack Python allows;
 larger ones are allocated by the call."""
 
 
+# --------------------------------------------------------------- entry points
 _F1 = nt.Array(nt.float64, 1, "C")
 _F2 = nt.Array(nt.float64, 2, "C")
 _F3 = nt.Array(nt.float64, 3, "C")
 _R1 = nt.Array(nt.float64, 1, "C", readonly=True)
 _ENTRY = {"cache": True, "nogil": True}
-
-
-@nb.njit(inline="always")
-def _scratch_size(n: int) -> int:  # pragma: no cover - compiled
-    """:func:`flexarm.model.arrays.workspace_size` of ``n`` coordinates."""
-    return 2 * n * n + (10 + N_CHAIN_COLUMNS) * n + (AX_ROWS + 3 * n) * max(n, 3)
-
-
-@nb.njit(inline="always")
-def _scratch(out: F64, used: int, size: int) -> F64:  # pragma: no cover - compiled
-    """A workspace of ``size`` values: ``out``'s tail after its first ``used`` values
-    when the caller made it that long (an arm too large for the stack), else on
-    the stack of the entry point."""
-    if out.size >= used + size:
-        wbuf: F64 = _view(out, used, (size,), np.float64)
-        return wbuf
-    return _stack(size)  # type: ignore[no-any-return]
 
 
 # Each entry point below is compiled at import; the kernel is inlined into one
@@ -351,14 +94,14 @@ def _scratch(out: F64, used: int, size: int) -> F64:  # pragma: no cover - compi
 def _dynamics(buf: F64, q: F64, dq: F64, tau: F64, out: F64) -> int:  # pragma: no cover
     """:func:`flexarm.model.dynamics.forward_dynamics` of the packed arm into
     ``out[:n_dof]``; the workspace is ``out``'s tail if it has one of
-    :func:`_scratch_size` values, else on this call's stack. Returns a status code
+    :func:`scratch_size` values, else on this call's stack. Returns a status code
     (0: done)."""
-    status = _check_state(q, dq, tau, buf)
-    if status == _OK:
+    status = state_status(q, dq, tau, buf)
+    if status == OK:
         n = q.shape[0]
-        wbuf = _scratch(out, n, _scratch_size(n))
-        ws = _workspace(wbuf, n, _own_mass(wbuf, n))
-        _forward_dynamics(q, dq, tau, _unpack(buf), ws, _view(out, 0, (n,), np.float64))
+        wbuf = scratch(out, n, scratch_size(n))
+        ws = workspace(wbuf, n, own_mass(wbuf, n))
+        forward_dynamics(q, dq, tau, unpack(buf), ws, view(out, 0, (n,), np.float64))
     return status
 
 
@@ -368,8 +111,8 @@ def _dynamics_rows(
 ) -> int:  # pragma: no cover - compiled
     """:func:`_dynamics` for every row of ``q, dq, tau`` (2-D) into ``out``; ``row``
     is the output of one call (``n_dof`` values, or more with the workspace)."""
-    status = _check_states(q, dq, tau, buf)
-    if status == _OK:
+    status = states_status(q, dq, tau, buf)
+    if status == OK:
         n = q.shape[1]
         for b in range(q.shape[0]):
             _dynamics(buf, q[b], dq[b], tau[b], row)
@@ -383,13 +126,13 @@ def _mass_matrix(buf: F64, q: F64, out: F64) -> int:  # pragma: no cover - compi
     """``M(q)`` of :func:`flexarm.model.dynamics.mass_and_bias` into ``out[:n_dof]``
     (``out`` of shape (rows, n_dof): its rows after the first ``n_dof``, if enough,
     hold the workspace, else it is on this call's stack)."""
-    n = _sizes(buf)[1]
-    status = _check(q, n, 0)
-    if status == _OK:
-        flat = _view(out, 0, (out.size,), np.float64)
-        wbuf = _scratch(flat, n * n, _scratch_size(n))
-        mass = _view(flat, 0, (n, n), np.float64)
-        _mass_and_bias(q, q, _unpack(buf), _workspace(wbuf, n, mass))  # M needs no dq
+    n = sizes(buf)[1]
+    status = vector_status(q, n, 0)
+    if status == OK:
+        flat = view(out, 0, (out.size,), np.float64)
+        wbuf = scratch(flat, n * n, scratch_size(n))
+        mass = view(flat, 0, (n, n), np.float64)
+        mass_and_bias(q, q, unpack(buf), workspace(wbuf, n, mass))  # M needs no dq
     return status
 
 
@@ -397,9 +140,9 @@ def _mass_matrix(buf: F64, q: F64, out: F64) -> int:  # pragma: no cover - compi
 def _mass_matrix_rows(buf: F64, block: F64, q: F64, out: F64) -> int:  # pragma: no cover - compiled
     """:func:`_mass_matrix` for every row of ``q`` into ``out`` (m, n, n); ``block`` is
     the output of one call."""
-    n, m = _sizes(buf)[1], q.shape[0]
-    status = _check_rows(q, m, n, 0)
-    if status == _OK:
+    n, m = sizes(buf)[1], q.shape[0]
+    status = rows_status(q, m, n, 0)
+    if status == OK:
         for b in range(m):
             _mass_matrix(buf, q[b], block)
             for r in range(n):
@@ -413,9 +156,9 @@ def _point(
     buf: F64, q: F64, link: int, distance: float, phi: F64, out: F64
 ) -> int:  # pragma: no cover - compiled
     """Position of the point ``distance`` along ``link`` (basis ``phi``) into ``out`` (2,)."""
-    status = _check(q, _sizes(buf)[1], 0)
-    if status == _OK:
-        px, py, _, _ = _point_state(q, q, _unpack(buf), link, distance, phi)
+    status = vector_status(q, sizes(buf)[1], 0)
+    if status == OK:
+        px, py, _, _ = point_state(q, q, unpack(buf), link, distance, phi)
         out[0] = px
         out[1] = py
     return status
@@ -427,20 +170,14 @@ def _point_rows(
 ) -> int:  # pragma: no cover - compiled
     """:func:`_point` for every row of ``q`` into ``out`` (m, 2)."""
     m = q.shape[0]
-    status = _check_rows(q, m, _sizes(buf)[1], 0)
-    if status == _OK:
-        model = _unpack(buf)
+    status = rows_status(q, m, sizes(buf)[1], 0)
+    if status == OK:
+        arrays = unpack(buf)
         for b in range(m):
-            px, py, _, _ = _point_state(q[b], q[b], model, link, distance, phi)
+            px, py, _, _ = point_state(q[b], q[b], arrays, link, distance, phi)
             out[b, 0] = px
             out[b, 1] = py
     return status
-
-
-@nb.njit
-def _unpacked(buf: F64) -> ArmArrays:  # pragma: no cover - compiled
-    """:func:`_unpack` as a function (with the refcount runtime), for tests."""
-    return _unpack(buf)
 
 
 # ------------------------------------------------------------------ the object

@@ -8,39 +8,27 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from .arrays import (
-    J_A1,
-    J_ASW,
-    J_COUPLED,
-    J_DAMPING,
-    J_FRICTION_ON_MOTOR,
-    J_G1,
-    J_HAS_FRICTION,
-    J_INERTIA,
-    N_JOINT_COLUMNS,
-    N_LINK_COLUMNS,
-    ArmArrays,
-    pack_arm_arrays,
-)
+from . import arrays as layout
+from .arrays import N_JOINT_COLUMNS, N_LINK_COLUMNS, ArmArrays, pack_arm_arrays
+from .beam import BeamModes
 from .foreshortening import foreshortening_integrals
 from .joints import LinearJoint, NonlinearJoint
 from .link import Link
-from .modes import BeamModes
 
-__all__ = ["PackableArm", "outboard_loads", "pack"]
+__all__ = ["ArmParameters", "PackableArm", "outboard_loads", "pack"]
 
 F64 = NDArray[np.float64]
 
 
-class PackableArm(Protocol):
-    """What :func:`pack` and :func:`outboard_loads` read of an arm."""
+class ArmParameters(Protocol):
+    """The parameters and sizes of an arm (:class:`flexarm.FlexibleArm`) that every
+    function building its model reads (:func:`pack`,
+    :func:`flexarm.model.lagrangian.body_terms`)."""
 
     @property
     def links(self) -> Sequence[Link]: ...
     @property
     def joints(self) -> Sequence[LinearJoint | NonlinearJoint] | None: ...
-    @property
-    def boundary(self) -> str: ...
     @property
     def payload_mass(self) -> float: ...
     @property
@@ -48,15 +36,22 @@ class PackableArm(Protocol):
     @property
     def rotor_coupling(self) -> bool: ...
     @property
+    def n_dof(self) -> int: ...
+    @property
+    def n_links(self) -> int: ...
+
+
+class PackableArm(ArmParameters, Protocol):
+    """What :func:`pack` and :func:`outboard_loads` read of an arm."""
+
+    @property
+    def boundary(self) -> str: ...
+    @property
     def joint_friction(self) -> str: ...
     @property
     def geometric_stiffening(self) -> bool: ...
     @property
     def modes(self) -> tuple[BeamModes, ...]: ...
-    @property
-    def n_dof(self) -> int: ...
-    @property
-    def n_links(self) -> int: ...
     @property
     def n_modes(self) -> tuple[int, ...]: ...
 
@@ -108,14 +103,14 @@ def pack(arm: PackableArm) -> ArmArrays:
     joint = np.zeros((len(arm.joints or ()), N_JOINT_COLUMNS))
     for i, jt in enumerate(arm.joints or ()):
         row = joint[i]
-        row[J_A1 : J_ASW + 1] = jt.spring_params
-        row[J_INERTIA] = jt.motor_inertia
-        row[J_DAMPING] = jt.motor_damping
-        row[J_COUPLED] = float(arm.rotor_coupling)
+        row[layout.J_A1 : layout.J_ASW + 1] = jt.spring_params
+        row[layout.J_INERTIA] = jt.motor_inertia
+        row[layout.J_DAMPING] = jt.motor_damping
+        row[layout.J_COUPLED] = float(arm.rotor_coupling)
         if jt.friction is not None:
-            row[J_HAS_FRICTION] = 1.0
-            row[J_FRICTION_ON_MOTOR] = float(arm.joint_friction == "motor")
-            row[J_G1:] = jt.friction.params
+            row[layout.J_HAS_FRICTION] = 1.0
+            row[layout.J_FRICTION_ON_MOTOR] = float(arm.joint_friction == "motor")
+            row[layout.J_G1 :] = jt.friction.params
     shortening = _pack_foreshortening(arm, start) if arm.geometric_stiffening else {}
     return pack_arm_arrays(
         mode_start=start,

@@ -23,7 +23,7 @@ F64 = NDArray[np.float64]
 
 
 class ModeShapes(Protocol):
-    """One link's assumed modes (:class:`flexarm.model.modes.BeamModes`)."""
+    """One link's assumed modes (:class:`flexarm.model.beam.BeamModes`)."""
 
     @property
     def frequencies(self) -> F64:

@@ -30,7 +30,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .arrays import ArmArrays, Workspace
-from .dynamics import _ldlt_solve, joint_forces, mass_and_bias
+from .dynamics import joint_forces, mass_and_bias
+from .dynamics._dense import ldlt_solve
 
 __all__ = ["free_range", "prescribed_accelerations", "prescribed_dynamics"]
 
@@ -91,7 +92,7 @@ def prescribed_dynamics(
         for c in range(r + 1):
             L[r, c] = M[f0 + r, f0 + c]
     if nf > 0:
-        _ldlt_solve(L[:nf, :nf], b[:nf], ws.inv_diag[:nf])
+        ldlt_solve(L[:nf, :nf], b[:nf], ws.inv_diag[:nf])
     for r in range(nf):
         ddq[f0 + r] = b[r]
     for i in range(n_links):

@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..model.arrays import ArmArrays
-from ..model.dynamics_points import _point_kinematics
+from ..model.dynamics._points import point_kinematics
 
 __all__ = [
     "SensorArrays",
@@ -113,7 +113,7 @@ def sense(q: F64, dq: F64, model: ArmArrays, sensor: SensorArrays, out: F64) -> 
         e = model.mode_start[n_links] if model.joint.shape[0] > 0 else 0  # motors or joints
         rigid_chain_point(sensor.levers, q[e : e + n_links], dq[e : e + n_links], out)
     else:
-        _point_kinematics(q, dq, model, link, sensor.distance[0], sensor.phi, out)
+        point_kinematics(q, dq, model, link, sensor.distance[0], sensor.phi, out)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")

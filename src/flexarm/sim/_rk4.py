@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 from .._compile import njit_runtime_free
 from ..model.arrays import ArmArrays, Workspace
 from ..model.dynamics import forward_dynamics_general
-from ..model.dynamics_two_links import _accelerations_two_links_one_mode
+from ..model.dynamics._two_links import accelerations_two_links_one_mode
 
 __all__ = ["DIVERGENCE_RATE", "diverged", "rk4_step", "rk4_step_two_links_one_mode"]
 
@@ -144,7 +144,7 @@ def rk4_step_two_links_one_mode(
             vs0, vs1, vs2, vs3 = v0 + c * a0, v1 + c * a1, v2 + c * a2, v3 + c * a3
         tau = tau0 if stage == 0 else (tau_mid if stage < 3 else tau1)
         t0, t1 = tau[0], tau[1]
-        a0, a1, a2, a3 = _accelerations_two_links_one_mode(
+        a0, a1, a2, a3 = accelerations_two_links_one_mode(
             qs0, qs1, qs2, qs3, vs0, vs1, vs2, vs3, t0, t1, model
         )
         if stage == 0:

@@ -35,8 +35,8 @@ from ..control.signals import (
 )
 from ..errors import InvalidValueError
 from ..model.arrays import LEN, ArmArrays, Workspace, make_workspace
-from ..model.dynamics_points import _point_state
-from ..model.dynamics_two_links import _is_two_links_one_mode
+from ..model.dynamics._points import point_state
+from ..model.dynamics._two_links import is_two_links_one_mode
 from ..model.kernel_checks import check_model, check_vector, check_workspace
 from ..sensing import _channels
 from ..sensing.channels import SensorArrays, check_sensor_arrays
@@ -263,7 +263,7 @@ def _run(
     x_new = sig[2 * n_ch + n_y :]
     noisy = noise.shape[0] > 0
     joint_sensor = sensor.link[0] < 0
-    two_links_one_mode = _is_two_links_one_mode(model)
+    two_links_one_mode = is_two_links_one_mode(model)
     o_angle, o_rate = y_angles(n_links), y_rates(n_links)
     o_point, o_modes = y_point(n_links), y_modes(n_links)
     o_ff = r_feedforward(n_links)
@@ -312,7 +312,7 @@ def _run(
             for c in range(y.shape[0]):
                 out.y[row, c] = y[c]
             if record_tip:
-                px, py, _, _ = _point_state(q, q, model, last_link, tip_distance, loop.tip_phi)
+                px, py, _, _ = point_state(q, q, model, last_link, tip_distance, loop.tip_phi)
                 out.tip[row, 0] = px
                 out.tip[row, 1] = py
             if streamed:

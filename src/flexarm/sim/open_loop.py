@@ -31,7 +31,7 @@ from .._io import JSONValue
 from .._validation import check_array, check_bool, check_int, check_option, check_real
 from ..errors import InvalidValueError
 from ..model.arrays import ArmArrays, Workspace, make_workspace
-from ..model.dynamics_two_links import _is_two_links_one_mode
+from ..model.dynamics._two_links import is_two_links_one_mode
 from ..model.plant import Plant, check_plant
 from . import _rk4
 from .chunks import DIVERGED, OK, run_in_chunks
@@ -148,7 +148,7 @@ def run_open_loop(
     n_rows = out_q.shape[0]
     h = dt / substeps
     q, dq, st = state.q, state.dq, state.stage_tau
-    two_links_one_mode = _is_two_links_one_mode(model)
+    two_links_one_mode = is_two_links_one_mode(model)
     for k in range(k0, k1):
         tk = t0 + k * dt
         for r in range(q.shape[0]):

@@ -1,5 +1,7 @@
 r"""The recursive forward dynamics of the arm, O(n_links): :func:`accelerations_recursive`.
 
+Internal: the bare kernel behind :func:`flexarm.model.dynamics.forward_dynamics_recursive`.
+
 The dense kernel (:func:`flexarm.model.dynamics.forward_dynamics_dense`) forms the
 mass matrix and factors it: its cost grows as the cube of the number of links.
 This is the articulated-body algorithm (Featherstone's, with each link's modes
@@ -13,7 +15,7 @@ angular acceleration, in ``F_i``'s axes), forces ``(f_x, f_y, n)`` (about the
 joint). With ``A_i`` the motion of ``F_i`` and ``ddelta_i`` the link's modal
 accelerations, link ``i``'s generalised inertial force is ``Mb_i [A_i;
 ddelta_i] + beta_i``: its body inertia ``Mb_i`` and the velocity terms
-``beta_i`` of :mod:`flexarm.model.dynamics` (without the part that moves with
+``beta_i`` of the dense kernel (without the part that moves with
 the frame's own velocity-dependent acceleration, which ``A_i`` carries here).
 The tip of link ``i`` moves as ``T_i A_i + E_i ddelta_i + c_i`` (``T_i`` the
 rigid transfer to the tip, ``E_i`` the modes' tip displacements and slopes,
@@ -38,15 +40,8 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from .arrays import (
-    AX_BETA,
-    AX_BETA_MODES,
-    AX_IALPHA,
-    AX_Q,
-    AX_SL,
-    AX_TIP,
-    AX_WALPHA,
-    AX_Y,
+from .. import arrays as layout
+from ..arrays import (
     CH_AD,
     CH_COS,
     CH_CX,
@@ -62,39 +57,18 @@ from .arrays import (
     CH_ZB,
     HUB_MASS,
     INERTIA,
-    J_COUPLED,
-    J_INERTIA,
     LEN,
     MASS,
     STATIC,
     ArmArrays,
     Workspace,
 )
-from .dynamics_foreshortening import link_foreshortening, link_sums
+from ._dense import ldlt_factor
+from ._link_terms import link_foreshortening, link_sums
 
 __all__ = ["accelerations_recursive"]
 
 F64 = NDArray[np.float64]
-
-
-@nb.njit(cache=True, nogil=True, inline="always")
-def _ldlt_block(M: F64, a0: int, a1: int, inv_d: F64) -> None:  # pragma: no cover - compiled
-    """``M[a0:a1, a0:a1] = L D L'`` in place from its lower triangle (unit ``L`` below
-    the diagonal, ``D`` on it, ``1 / D`` into ``inv_d[a0:a1]``)."""
-    for j in range(a0, a1):
-        for k in range(a0, j):
-            t = M[j, k]
-            for p in range(a0, k):
-                t -= M[j, p] * M[k, p]
-            M[j, k] = t
-        d = M[j, j]
-        for k in range(a0, j):
-            t = M[j, k]
-            lk_ = t * inv_d[k]
-            d -= t * lk_
-            M[j, k] = lk_
-        M[j, j] = d
-        inv_d[j] = 1.0 / d
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -115,8 +89,8 @@ def _solve_block(
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _accelerations_recursive(
-    q: F64, dq: F64, model: ArmArrays, ws: Workspace, ddq: F64
+def accelerations_recursive(
+    q: F64, dq: F64, arrays: ArmArrays, ws: Workspace, ddq: F64
 ) -> None:  # pragma: no cover - compiled
     """``ddq`` from ``q, dq`` and the generalised forces in ``ws.rhs`` (order of ``q``:
     everything but inertia, as :func:`flexarm.model.dynamics.forward_dynamics_dense`
@@ -127,13 +101,13 @@ def _accelerations_recursive(
     coupling a link's frame to its modes, ``ws.axial`` one link's foreshortening
     terms.
     """
-    n_links = model.link.shape[0]
-    ms, lk, jt = model.mode_start, model.link, model.joint
-    v, w = model.mass_integral, model.moment_integral
-    tdef, tslope, md = model.tip_deflection, model.tip_slope, model.modal_mass
+    n_links = arrays.link.shape[0]
+    ms, lk, jt = arrays.mode_start, arrays.link, arrays.joint
+    v, w = arrays.mass_integral, arrays.moment_integral
+    tdef, tslope, md = arrays.tip_deflection, arrays.tip_slope, arrays.modal_mass
     nq = int(ms[n_links])  # joints and modes; the motor angles follow
     has_joints = jt.shape[0] > 0
-    has_shortening = model.shortening_quartic.shape[1] > 0
+    has_shortening = arrays.shortening_quartic.shape[1] > 0
     rhs, ch, K, B, F = ws.rhs, ws.chain, ws.lmass, ws.rows, ws.axial
     # ---- outward: the links' angular rates and the turns between their frames
     ad = 0.0
@@ -161,15 +135,15 @@ def _accelerations_recursive(
         ialpha = ia + dmd
         lt = L
         if stiff:  # with the frame's own acceleration zero: it is in A here
-            cxe = link_foreshortening(q, dq, model, a0, a1, cx, ad, 0.0, 0.0, F)
-            ialpha += F[AX_IALPHA, 0]
-            lt = L - F[AX_TIP, 0]
+            cxe = link_foreshortening(q, dq, arrays, a0, a1, cx, ad, 0.0, 0.0, F)
+            ialpha += F[layout.AX_IALPHA, 0]
+            lt = L - F[layout.AX_TIP, 0]
         # velocity-dependent acceleration of the tip relative to the joint, F_i axes
         tx = -ad2 * lt - 2.0 * ad * ed
         ty = -ad2 * e
         if stiff:
-            tx -= F[AX_TIP, 1]
-            ty -= 2.0 * ad * F[AX_TIP, 2]
+            tx -= F[layout.AX_TIP, 1]
+            ty -= 2.0 * ad * F[layout.AX_TIP, 2]
         # ---- what rides on the tip, in F_i's axes about the tip: the child turned
         # back by gamma_{i+1}, the hub of joint i+1, or the payload
         j00 = j01 = j02 = j11 = j12 = j22 = 0.0
@@ -187,13 +161,13 @@ def _accelerations_recursive(
             f0 = cg * p0 - sg * p1
             f1 = sg * p0 + cg * p1
             f2 = p2
-            if has_joints and jt[i + 1, J_COUPLED] != 0.0:
+            if has_joints and jt[i + 1, layout.J_COUPLED] != 0.0:
                 f2 += rhs[nq + i + 1]  # the rotor passes its generalised force on
         else:
-            mp = model.payload[0]
+            mp = arrays.payload[0]
             j00 = mp
             j11 = mp
-            j22 = model.payload[1]
+            j22 = arrays.payload[1]
         f0 += j00 * tx + j01 * ty
         f1 += j01 * tx + j11 * ty
         f2 += j02 * tx + j12 * ty
@@ -212,21 +186,21 @@ def _accelerations_recursive(
         b1 = -ad2 * vd + f1
         b2 = 2.0 * ad * dmdd - e * f0 + lt * f1 + f2
         if stiff:
-            b0 += F[AX_BETA, 0]
-            b1 += F[AX_BETA, 1]
-            b2 += F[AX_BETA, 2]
+            b0 += F[layout.AX_BETA, 0]
+            b1 += F[layout.AX_BETA, 1]
+            b2 += F[layout.AX_BETA, 2]
         for g in range(a0, a1):
             kk = g - a0
-            ex = -F[AX_SL, kk] if stiff else 0.0
+            ex = -F[layout.AX_SL, kk] if stiff else 0.0
             ey, et = tdef[g], tslope[g]
             ch[g, CH_EX] = ex
             je0 = j00 * ex + j01 * ey + j02 * et  # J E[:, g]
             je1 = j01 * ex + j11 * ey + j12 * et
             je2 = j02 * ex + j12 * ey + j22 * et
             # the frame-mode block (rows ux, uy, alpha), into B
-            B[0, g] = je0 - (F[AX_Y, kk] if stiff else 0.0)
+            B[0, g] = je0 - (F[layout.AX_Y, kk] if stiff else 0.0)
             B[1, g] = v[g] + je1
-            B[2, g] = w[g] - e * je0 + lt * je1 + je2 + (F[AX_WALPHA, kk] if stiff else 0.0)
+            B[2, g] = w[g] - e * je0 + lt * je1 + je2 + (F[layout.AX_WALPHA, kk] if stiff else 0.0)
             # the modal block (lower triangle), into K
             for h in range(a0, g + 1):
                 ex_h = ch[h, CH_EX]
@@ -235,13 +209,13 @@ def _accelerations_recursive(
                 jh2 = j02 * ex_h + j12 * tdef[h] + j22 * tslope[h]
                 kgh = md[g, h] + ex * jh0 + ey * jh1 + et * jh2
                 if stiff:
-                    kgh += F[AX_Q + kk, h - a0]
+                    kgh += F[layout.AX_Q + kk, h - a0]
                 K[g, h] = kgh
             bg = ex * f0 + ey * f1 + et * f2
             for c in range(a0, a1):
                 bg -= ad2 * md[g, c] * q[c]
             if stiff:
-                bg += F[AX_BETA_MODES, kk]
+                bg += F[layout.AX_BETA_MODES, kk]
             # right-hand sides of the modal block: K_da (3 columns) and Q - k
             ch[g, CH_Z] = B[0, g]
             ch[g, CH_Z + 1] = B[1, g]
@@ -249,7 +223,7 @@ def _accelerations_recursive(
             ch[g, CH_ZB] = rhs[g] - bg
         # ---- eliminate the modes: Z = K_dd^-1 K_da, z = K_dd^-1 (Q - k)
         if a1 > a0:
-            _ldlt_block(K, a0, a1, ws.inv_diag)
+            ldlt_factor(K, a0, a1, ws.inv_diag)
             for col in range(CH_Z, CH_ZB + 1):
                 _solve_block(K, a0, a1, ws.inv_diag, ch, col)
         for g in range(a0, a1):
@@ -284,7 +258,7 @@ def _accelerations_recursive(
         p2 = rhs[i]  # b2 + d * u / d: the joint passes its own force on
     # ---- outward: accelerations
     if has_joints:
-        ddq[nq] = rhs[nq] / jt[0, J_INERTIA]  # the first rotor's carrier is the base
+        ddq[nq] = rhs[nq] / jt[0, layout.J_INERTIA]  # the first rotor's carrier is the base
     ax = ay = ath = 0.0  # the motion of F_i, less the joint's own acceleration
     for i in range(n_links):
         a0, a1 = ms[i], ms[i + 1]
@@ -307,23 +281,8 @@ def _accelerations_recursive(
             tt += tslope[g] * dd
         if has_joints and i + 1 < n_links:
             m = nq + i + 1
-            acc = rhs[m] / jt[i + 1, J_INERTIA]
-            if jt[i + 1, J_COUPLED] != 0.0:
+            acc = rhs[m] / jt[i + 1, layout.J_INERTIA]
+            if jt[i + 1, layout.J_COUPLED] != 0.0:
                 acc -= tt
             ddq[m] = acc
         ax, ay, ath = tx, ty, tt
-
-
-def accelerations_recursive(q: F64, dq: F64, model: ArmArrays, ws: Workspace, ddq: F64) -> None:
-    """``_accelerations_recursive`` (``ws.rhs`` holds the generalised forces),
-    its arguments checked: from Python, for tests; the checked face of the whole
-    recursive path is :func:`flexarm.model.dynamics.forward_dynamics_recursive`."""
-    from .kernel_checks import check_model, check_vector, check_workspace
-
-    owner = "accelerations_recursive"
-    _, n = check_model(model, owner)
-    check_vector(q, "q", owner, (n,))
-    check_vector(dq, "dq", owner, (n,))
-    check_workspace(ws, n, owner)
-    check_vector(ddq, "ddq", owner, (n,), writable=True)
-    _accelerations_recursive(q, dq, model, ws, ddq)

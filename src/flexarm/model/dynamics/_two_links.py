@@ -1,7 +1,12 @@
-"""The paper's structure in scalars: two links, one mode each, rigid joints.
+"""The paper's structure in scalars, compiled: two links, one mode each, rigid joints.
 
-:func:`accelerations_two_links_one_mode` is
-:func:`flexarm.model.dynamics.forward_dynamics_general` written out for
+Internal: the bare kernels behind
+:func:`flexarm.model.dynamics.accelerations_two_links_one_mode`,
+:func:`flexarm.model.dynamics.forward_dynamics_two_links_one_mode` and
+:func:`flexarm.model.dynamics.is_two_links_one_mode`.
+
+:func:`accelerations_two_links_one_mode` is the dense kernel
+(:func:`flexarm.model.dynamics.forward_dynamics_dense`) written out for
 ``q = (theta1, theta2, delta1, delta2)``: the same quantities in the same order,
 on scalars that stay in registers (about 4x faster a call). The tests hold the
 two together.
@@ -13,10 +18,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from .._compile import compiled_as
-from ..errors import InvalidValueError
-from .arrays import HUB_MASS, INERTIA, LEN, MASS, STATIC, ArmArrays
-from .kernel_checks import check_model, check_state, check_vector
+from ..arrays import HUB_MASS, INERTIA, LEN, MASS, STATIC, ArmArrays
 
 __all__ = [
     "accelerations_two_links_one_mode",
@@ -28,14 +30,14 @@ F64 = NDArray[np.float64]
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _is_two_links_one_mode(model: ArmArrays) -> bool:  # pragma: no cover - compiled
+def is_two_links_one_mode(arrays: ArmArrays) -> bool:  # pragma: no cover - compiled
     """Whether :func:`forward_dynamics_two_links_one_mode` applies: two links with
     one mode each (``q = (theta1, theta2, delta1, delta2)``), rigid joints and no
     geometric stiffening."""
-    ms = model.mode_start
+    ms = arrays.mode_start
     return bool(
-        model.joint.shape[0] == 0
-        and model.shortening_quartic.shape[1] == 0
+        arrays.joint.shape[0] == 0
+        and arrays.shortening_quartic.shape[1] == 0
         and ms.shape[0] == 3
         and ms[0] == 2
         and ms[1] == 3
@@ -44,7 +46,7 @@ def _is_two_links_one_mode(model: ArmArrays) -> bool:  # pragma: no cover - comp
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _accelerations_two_links_one_mode(
+def accelerations_two_links_one_mode(
     a1: float,
     a2: float,
     d1: float,
@@ -55,18 +57,18 @@ def _accelerations_two_links_one_mode(
     dd2: float,
     tau1: float,
     tau2: float,
-    model: ArmArrays,
+    arrays: ArmArrays,
 ) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
-    """:func:`forward_dynamics` of a two-link arm with one mode per link and rigid
-    joints (the paper's structure), in scalars.
+    """The accelerations of a two-link arm with one mode per link and rigid joints
+    (the paper's structure), in scalars.
 
-    This is :func:`_assemble_local` written out for that structure, in the same
-    local order ``(theta1, delta1, theta2, delta2)``, and a 2 x 2 block solve
-    in place of :func:`_ldlt_solve`: every intermediate stays in a register,
-    there is no loop, and one division is on the critical path. Hub mass,
-    payload and any mode shape (the modal integrals) are covered;
-    :func:`forward_dynamics` falls back to the general kernel for other
-    structures.
+    This is the dense kernel's assembly (``_dense.assemble_local``) written out
+    for that structure, in the same local order ``(theta1, delta1, theta2,
+    delta2)``, and a 2 x 2 block solve in place of its ``L D L'`` solve: every
+    intermediate stays in a register, there is no loop, and one division is on
+    the critical path. Hub mass, payload and any mode shape (the modal
+    integrals) are covered; :func:`flexarm.model.dynamics.forward_dynamics` falls
+    back to the general kernel for other structures.
 
     Parameters
     ----------
@@ -76,7 +78,7 @@ def _accelerations_two_links_one_mode(
         ``dq``, in the same order.
     tau1, tau2 : float
         Joint torques, N m.
-    model : ArmArrays
+    arrays : ArmArrays
         Must satisfy :func:`is_two_links_one_mode`.
 
     Returns
@@ -84,9 +86,9 @@ def _accelerations_two_links_one_mode(
     tuple of 4 float
         ``ddq``, in the order of ``q``.
     """
-    lk = model.link
-    v, w = model.mass_integral, model.moment_integral
-    tdef, tslope, md = model.tip_deflection, model.tip_slope, model.modal_mass
+    lk = arrays.link
+    v, w = arrays.mass_integral, arrays.moment_integral
+    tdef, tslope, md = arrays.tip_deflection, arrays.tip_slope, arrays.modal_mass
     v0, v1, w0, w1 = v[2], v[3], w[2], w[3]
     t0, t1, g0, g1 = tdef[2], tdef[3], tslope[2], tslope[3]
     md0, md1 = md[2, 2], md[3, 3]
@@ -146,7 +148,7 @@ def _accelerations_two_links_one_mode(
     h1 += u01 * beta_ux + u11 * beta_uy + g0 * beta_al
     h2 = beta_al
     # ---- payload at the tip of link 1
-    mp, jp = model.payload[0], model.payload[1]
+    mp, jp = arrays.payload[0], arrays.payload[1]
     if mp != 0.0 or jp != 0.0:
         L1 = lk[1, LEN]
         u00, u10 = u00 - e, u10 + L1
@@ -170,7 +172,7 @@ def _accelerations_two_links_one_mode(
         m32 += mp * (u13 * u12) + jp * g1
         m33 += mp * (u13 * u13) + jp * g1 * g1
     # ---- right-hand side, local order (theta1, delta1, theta2, delta2)
-    k, c = model.stiffness, model.damping
+    k, c = arrays.stiffness, arrays.damping
     y0 = tau1 - k[0] * a1 - c[0] * da1 - h0
     y1 = -k[2] * d1 - c[2] * dd1 - h1
     y2 = tau2 - k[1] * a2 - c[1] * da2 - h2
@@ -201,91 +203,10 @@ def _accelerations_two_links_one_mode(
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _forward_dynamics_two_links_one_mode(
-    q: F64, dq: F64, tau: F64, model: ArmArrays, ddq: F64
+def forward_dynamics_two_links_one_mode(
+    q: F64, dq: F64, tau: F64, arrays: ArmArrays, ddq: F64
 ) -> None:  # pragma: no cover - compiled
     """:func:`accelerations_two_links_one_mode` on arrays: ``ddq`` from ``q, dq, tau``."""
-    ddq[0], ddq[1], ddq[2], ddq[3] = _accelerations_two_links_one_mode(
-        q[0], q[1], q[2], q[3], dq[0], dq[1], dq[2], dq[3], tau[0], tau[1], model
-    )
-
-
-# ------------------------------------------------------------------ checked public faces
-# From Python each name checks its arguments first (a wrong shape would otherwise
-# write past an array's end); inside compiled code it is the kernel itself.
-def is_two_links_one_mode(model: ArmArrays) -> bool:
-    """Whether ``model`` has two links with one mode each and rigid joints (the
-    paper's structure, which the scalar kernel handles)."""
-    check_model(model, "is_two_links_one_mode")
-    return bool(_is_two_links_one_mode(model))
-
-
-def accelerations_two_links_one_mode(
-    a1: float,
-    a2: float,
-    d1: float,
-    d2: float,
-    da1: float,
-    da2: float,
-    dd1: float,
-    dd2: float,
-    t1: float,
-    t2: float,
-    model: ArmArrays,
-) -> tuple[float, float, float, float]:
-    """``_accelerations_two_links_one_mode``, its model checked: the paper's
-    structure only."""
-    _check_paper_structure(model, "accelerations_two_links_one_mode")
-    out: tuple[float, float, float, float] = _accelerations_two_links_one_mode(
-        float(a1),
-        float(a2),
-        float(d1),
-        float(d2),
-        float(da1),
-        float(da2),
-        float(dd1),
-        float(dd2),
-        float(t1),
-        float(t2),
-        model,
-    )
-    return out
-
-
-def forward_dynamics_two_links_one_mode(
-    q: F64, dq: F64, tau: F64, model: ArmArrays, ddq: F64
-) -> None:
-    """``ddq`` from ``q, dq, tau`` for the paper's structure, arguments checked."""
-    owner = "forward_dynamics_two_links_one_mode"
-    _check_paper_structure(model, owner)
-    check_state(q, dq, tau, model, owner)
-    check_vector(ddq, "ddq", owner, (4,), writable=True)
-    _forward_dynamics_two_links_one_mode(q, dq, tau, model, ddq)
-
-
-def _check_paper_structure(model: ArmArrays, owner: str) -> None:
-    n_links, n = check_model(model, owner)
-    if not (n_links == 2 and n == 4):
-        raise InvalidValueError(
-            f"The 'model' parameter of {owner} must have two links with one mode each and "
-            f"rigid joints. Got {n_links} links and {n} coordinates instead."
-        )
-
-
-@compiled_as(is_two_links_one_mode)
-def _is_two_links_one_mode_compiled(model):  # type: ignore[no-untyped-def]
-    return lambda model: _is_two_links_one_mode(model)
-
-
-@compiled_as(accelerations_two_links_one_mode)
-def _accelerations_compiled(a1, a2, d1, d2, da1, da2, dd1, dd2, t1, t2, model):  # type: ignore[no-untyped-def]
-    return lambda a1, a2, d1, d2, da1, da2, dd1, dd2, t1, t2, model: (
-        _accelerations_two_links_one_mode(a1, a2, d1, d2, da1, da2, dd1, dd2, t1, t2, model)
-    )
-
-
-@compiled_as(forward_dynamics_two_links_one_mode)
-def _forward_dynamics_two_links_compiled(q, dq, tau, model, ddq):  # type: ignore[no-untyped-def]
-    return lambda q, dq, tau, model, ddq: _forward_dynamics_two_links_one_mode(
-        q, dq, tau, model, ddq
+    ddq[0], ddq[1], ddq[2], ddq[3] = accelerations_two_links_one_mode(
+        q[0], q[1], q[2], q[3], dq[0], dq[1], dq[2], dq[3], tau[0], tau[1], arrays
     )

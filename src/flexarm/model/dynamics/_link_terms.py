@@ -1,10 +1,11 @@
 """One link's terms, compiled: its modal sums (:func:`link_sums`) and its
 foreshortening terms (:func:`link_foreshortening`).
 
-Called by the general kernel :func:`flexarm.model.dynamics.forward_dynamics_general`
-for every link with modes when the arm has geometric stiffening
+The dense and the recursive kernels (:func:`flexarm.model.dynamics.forward_dynamics_dense`,
+:func:`flexarm.model.dynamics.forward_dynamics_recursive`) call both for every link, the
+second only for a link with modes when the arm has geometric stiffening
 (:mod:`flexarm.model.foreshortening`); the NumPy reference is
-:func:`flexarm.model.lagrangian.body_terms`.
+:func:`flexarm.model.lagrangian.body_terms`. Internal: the kernels' building blocks.
 """
 
 from __future__ import annotations
@@ -12,18 +13,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .._compile import njit_runtime_free
-from .arrays import (
-    AX_BETA,
-    AX_BETA_MODES,
-    AX_IALPHA,
-    AX_Q,
-    AX_SL,
-    AX_TIP,
-    AX_WALPHA,
-    AX_Y,
-    ArmArrays,
-)
+from ..._compile import njit_runtime_free
+from .. import arrays as layout
+from ..arrays import ArmArrays
 
 __all__ = ["link_foreshortening", "link_sums"]
 
@@ -61,7 +53,7 @@ def link_sums(
 def link_foreshortening(
     q: F64,
     dq: F64,
-    model: ArmArrays,
+    arrays: ArmArrays,
     a0: int,
     a1: int,
     cx: float,
@@ -84,9 +76,9 @@ def link_foreshortening(
     reference ``flexarm.model.lagrangian._link_body`` has the derivation).
     """
     nm = a1 - a0
-    St, Sm, X = model.shortening_tip, model.shortening_mass, model.shortening_moment
-    T3, T4 = model.shortening_cubic, model.shortening_quartic
-    rq, rr, rt = AX_Q, AX_Q + nm, AX_Q + 2 * nm  # rows of Q, R, Q~
+    St, Sm, X = arrays.shortening_tip, arrays.shortening_mass, arrays.shortening_moment
+    T3, T4 = arrays.shortening_cubic, arrays.shortening_quartic
+    rq, rr, rt = layout.AX_Q, layout.AX_Q + nm, layout.AX_Q + 2 * nm  # rows of Q, R, Q~
     p = 0.0  # delta' y
     px = 0.0  # delta' X delta
     pxd = 0.0  # delta' X delta_dot
@@ -109,9 +101,9 @@ def link_foreshortening(
             xj += X[g, a0 + c] * qc
             sdj += St[g, a0 + c] * dc
             dsd += dq[g] * Sm[g, a0 + c] * dc
-        F[AX_Y, j] = yj
-        F[AX_SL, j] = slj
-        F[AX_BETA_MODES, j] = xj  # X delta, for now
+        F[layout.AX_Y, j] = yj
+        F[layout.AX_SL, j] = slj
+        F[layout.AX_BETA_MODES, j] = xj  # X delta, for now
         p += q[g] * yj
         px += q[g] * xj
         pxd += dq[g] * xj
@@ -161,13 +153,13 @@ def link_foreshortening(
                 - 0.5 * ad2 * F[rq + j, a] * q[a0 + a]
                 + F[rt + j, a] * dq[a0 + a]
             )
-        F[AX_WALPHA, j] = wa
-        F[AX_BETA_MODES, j] = bm + ad2 * F[AX_BETA_MODES, j] - bx * F[AX_Y, j]
-    F[AX_IALPHA, 0] = -px + 0.25 * dqd
-    F[AX_BETA, 0] = 0.5 * ad2 * p - dsd
-    F[AX_BETA, 1] = -2.0 * ad * ydd
-    F[AX_BETA, 2] = -0.5 * by * p + rdd - 2.0 * ad * (pxd - 0.5 * dqdd)
-    F[AX_TIP, 0] = 0.5 * ul2
-    F[AX_TIP, 1] = sdd
-    F[AX_TIP, 2] = sld
+        F[layout.AX_WALPHA, j] = wa
+        F[layout.AX_BETA_MODES, j] = bm + ad2 * F[layout.AX_BETA_MODES, j] - bx * F[layout.AX_Y, j]
+    F[layout.AX_IALPHA, 0] = -px + 0.25 * dqd
+    F[layout.AX_BETA, 0] = 0.5 * ad2 * p - dsd
+    F[layout.AX_BETA, 1] = -2.0 * ad * ydd
+    F[layout.AX_BETA, 2] = -0.5 * by * p + rdd - 2.0 * ad * (pxd - 0.5 * dqdd)
+    F[layout.AX_TIP, 0] = 0.5 * ul2
+    F[layout.AX_TIP, 1] = sdd
+    F[layout.AX_TIP, 2] = sld
     return cx - 0.5 * p

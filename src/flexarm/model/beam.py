@@ -70,11 +70,14 @@ from .._validation import (
     validate_real_fields,
 )
 from ..errors import InvalidValueError
+from . import _roots
+from ._roots import CACHED_UP_TO, frequency_function, frozen
 
 __all__ = [
     "MAX_TIP_RATIO",
     "NORMALIZATIONS",
     "BeamModes",
+    "UniformBeam",
     "cantilever_roots",
     "clamped_mass_roots",
     "frequency_function",
@@ -86,65 +89,6 @@ take (dimensionless): far beyond any physical arm, and the scaled frequency equa
 ``mu j lam**4`` stays a float64 number."""
 
 NORMALIZATIONS = ("mass", "amplitude", "tip")
-
-_LINEAR_STEP = math.pi / 64.0
-_LOG_POINTS_PER_DECADE = 64
-
-
-def frequency_function(
-    lam: ArrayLike, mass_ratio: float = 0.0, inertia_ratio: float = 0.0
-) -> NDArray[np.float64]:
-    """The clamped-mass frequency equation, scaled to stay O(1).
-
-    Parameters
-    ----------
-    lam : array_like
-        Dimensionless wavenumbers ``beta L`` (>= 0).
-    mass_ratio, inertia_ratio : float
-        ``mu = M / (rho L)`` and ``j = J / (rho L**3)``.
-
-    Returns
-    -------
-    ndarray
-        ``F(lam) / (cosh(lam) (1 + mu lam + j lam**3 + mu j lam**4))`` where
-        ``F`` is the left side of the frequency equation in the module
-        docstring. Same zeros as ``F``, no overflow for large ``lam``.
-    """
-    lam = np.asarray(lam, dtype=float)
-    mu, jr = float(mass_ratio), float(inertia_ratio)
-    e = np.exp(-lam)
-    sech = 2.0 * e / (1.0 + e * e)
-    tanh = (1.0 - e * e) / (1.0 + e * e)
-    c, s = np.cos(lam), np.sin(lam)
-    # cos*tanh - sin and sech - cos cancel to O(lam**3) and O(lam**4) at small lam
-    # (heavy tips): there use the series of cos*sinh - sin*cosh and 1 - cos*cosh.
-    small = lam < 1.0
-    bending = np.where(small, _series_n(lam) * sech, c * tanh - s)
-    clamped = np.where(small, _series_d(lam) * sech, sech - c)
-    f = sech + c + mu * lam * bending - jr * lam**3 * (s + tanh * c) + mu * jr * lam**4 * clamped
-    out: NDArray[np.float64] = f / (1.0 + mu * lam + jr * lam**3 + mu * jr * lam**4)
-    return out
-
-
-# cos(x) cosh(x) = sum_k (-4)**k x**(4k) / (4k)!; below x = 1 twelve terms are exact.
-_SERIES_K = np.arange(1, 13)
-_SERIES_COEF = (-4.0) ** _SERIES_K
-
-
-def _series_d(x: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``1 - cos(x) cosh(x)`` without cancellation for ``|x| < 1``."""
-    terms = _SERIES_COEF / np.array([math.factorial(4 * k) for k in _SERIES_K], dtype=float)
-    xx = np.minimum(np.abs(x), 1.0)[..., None]
-    out: NDArray[np.float64] = -np.sum(terms * xx ** (4 * _SERIES_K), axis=-1)
-    return out
-
-
-def _series_n(x: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``cos(x) sinh(x) - sin(x) cosh(x)`` (the derivative of ``cos cosh``) for ``|x| < 1``."""
-    terms = _SERIES_COEF / np.array([math.factorial(4 * k - 1) for k in _SERIES_K], dtype=float)
-    xx = np.minimum(np.abs(x), 1.0)[..., None]
-    out: NDArray[np.float64] = np.sum(terms * xx ** (4 * _SERIES_K - 1), axis=-1)
-    return out
 
 
 def clamped_mass_roots(
@@ -177,64 +121,9 @@ def clamped_mass_roots(
                 f"The '{name}' parameter of {owner} must be at most {MAX_TIP_RATIO:g} (beyond "
                 f"it the frequency equation overflows float64). Got {ratio!r} instead."
             )
-    if n <= _CACHED_UP_TO:  # arms built again and again, as in a sweep, share them
-        return _cached_roots(n, mu, jr).copy()
-    return _roots(n, mu, jr)
-
-
-_CACHED_UP_TO = 64
-"""Root and quadrature arrays of up to this many modes are kept once per process (a few
-kB each; larger ones are computed each time rather than held)."""
-
-
-@functools.lru_cache(maxsize=64)
-def _cached_roots(n: int, mu: float, jr: float) -> NDArray[np.float64]:
-    """:func:`_roots`, once per process for each argument (read-only)."""
-    return _frozen(_roots(n, mu, jr))
-
-
-def _roots(n: int, mu: float, jr: float) -> NDArray[np.float64]:
-    """:func:`clamped_mass_roots` of checked arguments."""
-    if n == 0:
-        return np.zeros(0)
-
-    # Lowest possible root: a rigid tip body on a massless beam bounds it from below.
-    small = min(1.0, (3.0 / max(mu, 1e-300)) ** 0.25, (1.0 / max(jr, 1e-300)) ** 0.25)
-    lo = 0.1 * small
-    decades = max(1.0, math.log10(1.0 / lo))
-    log_grid = np.logspace(math.log10(lo), 0.0, int(decades * _LOG_POINTS_PER_DECADE) + 1)
-    roots: list[float] = []
-    _collect_roots(log_grid, mu, jr, roots, n)
-    upper = 1.0
-    while len(roots) < n:
-        # Roots are about pi apart for large lam: extend in blocks that hold the rest.
-        span = (n - len(roots) + 2) * math.pi
-        steps = np.arange(int(span / _LINEAR_STEP) + 2, dtype=np.float64)
-        grid: NDArray[np.float64] = upper + _LINEAR_STEP * steps
-        _collect_roots(grid, mu, jr, roots, n)
-        upper = float(grid[-1])
-    return np.asarray(roots[:n])
-
-
-def _collect_roots(
-    grid: NDArray[np.float64], mu: float, jr: float, roots: list[float], n: int
-) -> None:
-    """Append the roots bracketed by sign changes of the scaled equation on ``grid``."""
-    from scipy.optimize import brentq  # loaded on first use: import flexarm stays light
-
-    def g(x: float) -> float:
-        return float(frequency_function(x, mu, jr))
-
-    values = frequency_function(grid, mu, jr)
-    for k in range(grid.size - 1):
-        if len(roots) >= n:
-            return
-        a, b = float(grid[k]), float(grid[k + 1])
-        fa, fb = float(values[k]), float(values[k + 1])
-        if fb == 0.0:
-            roots.append(b)
-        elif fa * fb < 0.0:
-            roots.append(brentq(g, a, b, xtol=1e-300, rtol=4 * np.finfo(float).eps, maxiter=200))
+    if n <= CACHED_UP_TO:  # arms built again and again, as in a sweep, share them
+        return _roots.cached_roots(n, mu, jr).copy()
+    return _roots.roots(n, mu, jr)
 
 
 def cantilever_roots(n: int) -> NDArray[np.float64]:
@@ -303,8 +192,38 @@ def _check_scales(length: float, rigidity: float, density: float, owner: str) ->
         )
 
 
+@dataclass(frozen=True)
+class UniformBeam:
+    """A uniform Euler–Bernoulli beam and the modes kept of it: what a
+    :class:`~flexarm.model.link.Link` and its :class:`BeamModes` share.
+
+    Parameters
+    ----------
+    length, flexural_rigidity, linear_density : float
+        ``L`` in m, ``EI`` in N m**2, ``rho`` in kg/m, all > 0.
+    n_modes : int
+        Assumed modes kept (>= 0).
+    """
+
+    length: float
+    flexural_rigidity: float
+    linear_density: float
+    n_modes: int = 1
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        positive = ("length", "flexural_rigidity", "linear_density")
+        validate_real_fields(self, owner, positive=positive)
+        object.__setattr__(self, "n_modes", check_int(self.n_modes, "n_modes", owner, minimum=0))
+
+    @property
+    def mass(self) -> float:
+        """Beam mass ``rho L`` in kg (hubs and tip loads excluded)."""
+        return self.linear_density * self.length
+
+
 @dataclass(frozen=True, eq=True)
-class BeamModes:
+class BeamModes(UniformBeam):
     """Assumed modes of a uniform Euler–Bernoulli beam, clamped at ``x = 0``.
 
     Parameters
@@ -348,10 +267,6 @@ class BeamModes:
     array([12.281, 76.966])
     """
 
-    length: float
-    flexural_rigidity: float
-    linear_density: float
-    n_modes: int = 1
     tip_mass: float = 0.0
     tip_inertia: float = 0.0
     normalization: str = "mass"
@@ -361,13 +276,8 @@ class BeamModes:
     def __post_init__(self) -> None:
         owner = "BeamModes"
         set_ = object.__setattr__
-        validate_real_fields(
-            self,
-            owner,
-            positive=("length", "flexural_rigidity", "linear_density"),
-            nonnegative=("tip_mass", "tip_inertia"),
-        )
-        set_(self, "n_modes", check_int(self.n_modes, "n_modes", owner, minimum=0))
+        super().__post_init__()
+        validate_real_fields(self, owner, nonnegative=("tip_mass", "tip_inertia"))
         check_option(self.normalization, "normalization", owner, NORMALIZATIONS)
         set_(self, "amplitude", check_real(self.amplitude, "amplitude", owner, positive=True))
         _check_scales(self.length, self.flexural_rigidity, self.linear_density, owner)
@@ -390,11 +300,11 @@ class BeamModes:
         check_time(1e-6 * npts * n, what, owner, remedy)  # ~1 us a mode and point here
         lam = clamped_mass_roots(self.n_modes, self.mass_ratio, self.inertia_ratio)
         coef = _shape_coefficients(lam, self.mass_ratio, self.inertia_ratio)
-        self._cache["roots"] = _frozen(lam)
+        self._cache["roots"] = frozen(lam)
         # Scale the unit-norm coefficients by the chosen normalisation.
         self._cache["coef"] = coef
         scale = self._normalization_scale(coef)
-        self._cache["coef"] = _frozen(coef * scale)
+        self._cache["coef"] = frozen(coef * scale)
 
     # ------------------------------------------------------------------ basics
     @property
@@ -503,16 +413,16 @@ class BeamModes:
         """Gauss–Legendre nodes and weights on ``[0, L]`` exact for these modes."""
         if "quad" not in self._cache:
             npts = _quadrature_points(self.roots)
-            small = self.n_modes <= _CACHED_UP_TO
+            small = self.n_modes <= CACHED_UP_TO
             t, w = _legendre_rule(npts) if small else _legendre_nodes(npts)
             L = self.length
-            self._cache["quad"] = (_frozen(0.5 * L * (t + 1.0)), _frozen(0.5 * L * w))
+            self._cache["quad"] = (frozen(0.5 * L * (t + 1.0)), frozen(0.5 * L * w))
         return self._cache["quad"]  # type: ignore[no-any-return]
 
     def _integral(self, key: str, fn: Any) -> NDArray[np.float64]:
         if key not in self._cache:
             x, w = self._quadrature()
-            self._cache[key] = _frozen(fn(x, w))
+            self._cache[key] = frozen(fn(x, w))
         return self._cache[key]  # type: ignore[no-any-return]
 
     @property
@@ -597,10 +507,4 @@ def _legendre_nodes(n_nodes: int) -> tuple[NDArray[np.float64], NDArray[np.float
 def _legendre_rule(n_nodes: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """:func:`_legendre_nodes`, once per process for each ``n_nodes`` (read-only)."""
     t, w = _legendre_nodes(n_nodes)
-    return _frozen(t), _frozen(w)
-
-
-def _frozen(a: NDArray[Any]) -> NDArray[Any]:
-    a = np.asarray(a)
-    a.flags.writeable = False
-    return a
+    return frozen(t), frozen(w)
