@@ -212,3 +212,27 @@ def test_window_search_is_searchsorted():
             for guesses in (table, wrong):
                 got = [locate(gs, v, right, floats, guesses) for v in values]
                 np.testing.assert_array_equal(got, expected)
+
+
+def test_series_at_many_points_equals_each_point_alone_bitwise():
+    """The series is evaluated cluster by cluster over the run of sorted points in reach;
+    each point must get the bits it gets alone (its clusters' terms in cluster order), in
+    the compiled evaluation and in exact mode (unsorted, repeated points)."""
+    from flexarm.ident.regression.kernels import gauss_series_eval, gauss_series_moments
+
+    X, y = data(5000, seed=23)
+    q = np.r_[np.random.default_rng(24).uniform(-0.3, 1.3, 40), 0.5, 0.5, 3.0]
+    h, origin, clusters = 0.04, -1.7, 400
+    mn, md = np.zeros((clusters, 28)), np.zeros((clusters, 28))
+    gauss_series_moments(X[:, 0], y, 1.0, origin, h, mn, md)
+    qs = np.sort(q)
+    together = gauss_series_eval(qs, origin, h, mn, md)
+    alone = [gauss_series_eval(np.array([v]), origin, h, mn, md) for v in qs]
+    for k in range(3):
+        np.testing.assert_array_equal(together[k], [a[k][0] for a in alone])
+    assert np.all(together[1][:-1] > 0) and together[1][-1] == 0.0  # 3.0: no cluster in reach
+
+    acc = fed(ExactSamples(smoothing("gaussian", (h,), 0.0, series=True)), X, y)
+    m = acc.evaluate(q[:, None])
+    np.testing.assert_array_equal(m, np.concatenate([acc.evaluate(np.array([[v]])) for v in q]))
+    assert np.isfinite(m[:-1]).all() and np.isnan(m[-1])  # 3.0: 50 h away

@@ -44,12 +44,17 @@ GAUSS_ZERO = 38.61
 def sample_bandwidths(
     bw: F64, decay: float, start: int, n: int, recursive: bool
 ) -> tuple[F64, F64]:  # pragma: no cover - compiled
-    """``h[k] = bw * i**(-decay)`` with ``i = start + k + 1``; scale ``prod(h)**-1`` or 1."""
+    """``h[k] = bw * i**(-decay)`` with ``i = start + k + 1``; scale ``prod(h)**-1`` or 1.
+
+    ``decay = 0`` takes ``i**(-0.0) = 1`` without calling ``pow`` (which returns
+    exactly 1 for a zero exponent).
+    """
     d = bw.shape[0]
     h = np.empty((n, d))
     scale = np.ones(n)
+    fixed = decay == 0.0
     for k in range(n):
-        f = float(start + k + 1) ** (-decay)
+        f = 1.0 if fixed else float(start + k + 1) ** (-decay)
         p = 1.0
         for j in range(d):
             h[k, j] = bw[j] * f

@@ -60,6 +60,7 @@ class ExactSamples(Accumulator):
         self._y = np.empty(16)
         self._h = np.empty((16, d))
         self._scale = np.empty(16)
+        self._filled = 0  # rows of _h and _scale computed so far (on first use)
 
     @property
     def X(self) -> F64:
@@ -76,30 +77,42 @@ class ExactSamples(Accumulator):
     @property
     def h(self) -> F64:
         """Per-sample bandwidths ``h_i``, shape ``(n, d)``."""
+        self._fill()
         out: F64 = self._h[: self.n_samples]
         return out
 
     @property
     def scale(self) -> F64:
         """Per-sample weight factors (``prod_j h_ij**-1`` or 1), shape ``(n,)``."""
+        self._fill()
         out: F64 = self._scale[: self.n_samples]
         return out
 
+    def _fill(self) -> None:
+        """Compute ``h_i`` and the scales of the samples added since the last use (they
+        depend on the index ``i`` only; the Gaussian series needs neither)."""
+        n0, n = self._filled, self.n_samples
+        if n > n0:
+            self._h[n0:n], self._scale[n0:n] = self.setup.sample_bandwidths(n0, n - n0)
+            self._filled = n
+
     def _add(self, X: F64, y: F64) -> None:
         n0, m = self.n_samples, X.shape[0]
-        h, scale = self.setup.sample_bandwidths(n0, m)
         need = n0 + m
         if need > self._y.shape[0]:
             cap = max(need, 2 * self._y.shape[0])
-            for name in ("_X", "_y", "_h", "_scale"):
+            for name, rows in (
+                ("_X", n0),
+                ("_y", n0),
+                ("_h", self._filled),
+                ("_scale", self._filled),
+            ):
                 old = getattr(self, name)
                 new = np.empty((cap, *old.shape[1:]))
-                new[:n0] = old[:n0]
+                new[:rows] = old[:rows]
                 setattr(self, name, new)
         self._X[n0:need] = X
         self._y[n0:need] = y
-        self._h[n0:need] = h
-        self._scale[n0:need] = scale
 
     def evaluate(self, Q: F64) -> F64:
         if self.setup.series:
@@ -150,9 +163,12 @@ class ExactSamples(Accumulator):
         mn = np.zeros((clusters, SERIES_TERMS))
         md = np.zeros((clusters, SERIES_TERMS))
         gauss_series_moments(x0, y, self.setup.series_scale(), origin, hs, mn, md)
-        num, den, shift = gauss_series_eval(np.ascontiguousarray(Q[:, 0]), origin, hs, mn, md)
-        out: F64 = _loops.ratio(num, den)
-        far = far_points(den, shift)
+        order = np.argsort(Q[:, 0], kind="stable")
+        num, den, shift = gauss_series_eval(np.ascontiguousarray(Q[order, 0]), origin, hs, mn, md)
+        out = np.empty(Q.shape[0])
+        out[order] = _loops.ratio(num, den)
+        far = np.empty(Q.shape[0], dtype=np.bool_)
+        far[order] = far_points(den, shift)
         if far.any():
             out[far] = self._direct(np.ascontiguousarray(Q[far]))
         return out
@@ -164,3 +180,4 @@ class ExactSamples(Accumulator):
         self._X, self._y, self._h, self._scale = (
             np.array(state[k], dtype=np.float64, order="C") for k in _KEYS
         )
+        self._filled = self._y.shape[0]
