@@ -82,8 +82,10 @@ Against the peer (target: >= 20x faster than ``KernelReg`` at ``--n-peer`` = 10*
 Every flexarm measurement is warmed up first (Numba compilation excluded); each
 repeat times one whole fit + predict with ``time.perf_counter_ns``; the tables give
 the best and the median of ``--repeat`` runs (``--peer-repeat`` for statsmodels,
-whose runs are slow). Everything runs in one thread (no ``parallel=True`` loops;
-``OPENBLAS_NUM_THREADS=1``).
+whose runs are slow). No ``parallel=True`` loops and ``OPENBLAS_NUM_THREADS=1``; as in
+a user's call, flexarm splits independent outputs (query or grid points) over the cores
+with threads where a call has more than ``2**22`` kernel weights to compute (the direct
+rows here; the series and binned rows run in one thread), the same numbers bit for bit.
 """
 
 from __future__ import annotations
