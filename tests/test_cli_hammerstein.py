@@ -50,6 +50,9 @@ def test_fit_with_two_known_points_recovers_the_nonlinearity(capsys, tmp_path, d
     assert summary["fit_percent"] == pytest.approx(model.fit_percent(u, y), rel=1e-12)
     assert summary["method"] == "white" and "looks white" in summary["reason"]
     assert summary["baseline"]["fit_percent"] == pytest.approx(model.baseline_.fit_percent(u, y))
+    # which won on the validation part, and by how much: the library's comparison
+    assert summary["comparison"] == model.report_.comparison.summary()
+    assert summary["winner"] == model.report_.winner == "hammerstein"
     # two-point normalisation: the estimate passes through the known points (up to the
     # interpolation between grid points 0.02 apart), and has the saturation's shape
     assert np.interp([0.0, 1.8], x, estimate) == pytest.approx([0.0, 1.0], abs=0.02)
@@ -173,6 +176,7 @@ def test_method_knots_and_bootstrap_options(capsys, tmp_path, data):
     assert header == "u,phi,phi_low,phi_high"
     status, text, err = run(capsys, *argv, "--lags", "20")
     assert status == 0 and "path: correlated input" in text and "linear ARX baseline" in text
+    assert "validation: the Hammerstein model (order" in text and "beats the best linear" in text
 
 
 def test_robot_experiment_designed_for_the_dead_band(capsys):
