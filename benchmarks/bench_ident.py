@@ -58,7 +58,7 @@ Streaming (target: ``--n`` = 10**6 samples onto the 512-point grid in <= 0.2 s o
         Taylor-series (fast Gauss transform) state; agrees with the direct sums
         to rounding (checked).
 
-Against the peer (target: >= 20x faster than ``KernelReg`` at ``--n-peer`` = 10**5 samples)
+Against the peer (target: >= 30x faster than ``KernelReg`` at ``--n-peer`` = 10**5 samples)
     statsmodels' ``KernelReg(y, X, var_type="c", reg_type="lc", bw=[h])`` (local constant,
     fixed bandwidth, its default continuous kernel ``ckertype="gaussian"``) constructed and
     ``fit`` at the 512 grid points, beside ``NadarayaWatson(kernel="gaussian",
@@ -128,7 +128,7 @@ KERNELS = ("epanechnikov", "uniform", "triangular", "gaussian")
 NOISE = 0.1
 CHECK_TOL = 1e-10  # agreement required of flexarm and statsmodels (relative to max |m|)
 TARGET_S = 0.2  # streaming target, seconds, at n = 10**6
-TARGET_RATIO = 20.0  # speed-up target over KernelReg
+TARGET_RATIO = 30.0  # speed-up target over KernelReg (the mean-only anchor)
 
 
 # ---------------------------------------------------------------------- data
