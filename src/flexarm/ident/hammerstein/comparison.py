@@ -267,11 +267,7 @@ def white_comparison(
     winner, se = _decide(model, lin, rows)
     variance = float(np.var(y[held]))
     return Comparison(
-        part=(
-            f"trailing part of the record (samples {n_estimation} to {index[-1]}; the linear "
-            f"models estimated on samples {index[split[0].mask][0]} to {n_estimation - 1}, the "
-            f"Hammerstein model on samples 0 to {n_estimation - 1})"
-        ),
+        part=_trailing_part(n_estimation, int(index[-1]), int(index[split[0].mask][0])),
         n_validation=int(np.count_nonzero(held)),
         model=label,
         model_mse=mse,
@@ -285,6 +281,18 @@ def white_comparison(
         recommended="identifier" if winner == "hammerstein" else "baseline",
         baseline_order=baseline_order,
     )
+
+
+def _trailing_part(n_estimation: int, last: int, linear_start: int) -> str:
+    """The white path's validation part, in words."""
+    if linear_start == 0:
+        fitted = f"the models estimated on samples 0 to {n_estimation - 1}"
+    else:
+        fitted = (
+            f"the linear models estimated on samples {linear_start} to {n_estimation - 1}, the "
+            f"Hammerstein model on samples 0 to {n_estimation - 1}"
+        )
+    return f"trailing part of the record (samples {n_estimation} to {last}; {fitted})"
 
 
 def compare_outputs(
