@@ -13,25 +13,11 @@ from flexarm.studies.reproduction.beyond import (
     ROWS,
     SENSORS,
     Beyond,
-    RowResult,
     _targets,
     choose_candidate,
     run_beyond,
 )
-
-
-def row(law, sensor, name, rms, mx=None, torque=40.0):
-    diverged = rms is None
-    return RowResult(
-        law=law,
-        sensor=sensor,
-        row=name,
-        status="diverged" if diverged else "ok",
-        diverged_at_s=1.0 if diverged else None,
-        rms_error_m=rms,
-        max_error_m=None if diverged else (mx if mx is not None else 3 * rms),
-        max_torque_Nm=None if diverged else torque,
-    )
+from helpers.reproduction import row_result
 
 
 def test_minimax_prefers_the_smallest_worst_row_and_counts_divergence_as_infinite():
@@ -39,13 +25,16 @@ def test_minimax_prefers_the_smallest_worst_row_and_counts_divergence_as_infinit
     results = [
         # the first candidate: best nominal, but one row diverges
         *[
-            row(f"lqg {names[0]}", "tip", r.name, 0.01 if i != 2 else None)
+            row_result(f"lqg {names[0]}", "tip", r.name, 0.01 if i != 2 else None)
             for i, r in enumerate(ROWS)
         ],
         # the second: worse nominal, worst row 0.03
-        *[row(f"lqg {names[1]}", "tip", r.name, 0.02 + 0.002 * i) for i, r in enumerate(ROWS)],
+        *[
+            row_result(f"lqg {names[1]}", "tip", r.name, 0.02 + 0.002 * i)
+            for i, r in enumerate(ROWS)
+        ],
         # the third: uniform 0.04
-        *[row(f"lqg {names[2]}", "tip", r.name, 0.04) for r in ROWS],
+        *[row_result(f"lqg {names[2]}", "tip", r.name, 0.04) for r in ROWS],
     ]
     assert choose_candidate(results, "tip") == names[1]
     assert choose_candidate(results, "point:1:0.5") == names[0]  # no runs: all infinite, first
@@ -54,20 +43,22 @@ def test_minimax_prefers_the_smallest_worst_row_and_counts_divergence_as_infinit
 def test_targets_and_the_adaptation_verdict_on_constructed_runs():
     chosen = {"tip": "default", "point:1:0.5": "default"}
     rows = [
-        row("lqg default", "tip", r.name, 0.019 if i == 0 else 0.019 * (1.2 + 0.1 * i))
+        row_result("lqg default", "tip", r.name, 0.019 if i == 0 else 0.019 * (1.2 + 0.1 * i))
         for i, r in enumerate(ROWS)
     ]
     rows[0]["max_error_m"] = 0.13  # above 0.12: one target missed
     rows += [
-        row("lqg default", "point:1:0.5", r.name, 0.03 if i != 1 else None)
+        row_result("lqg default", "point:1:0.5", r.name, 0.03 if i != 1 else None)
         for i, r in enumerate(ROWS)
     ]
-    rows += [row(f"lqg gain {g:g}", "tip", "nominal", 0.019 / g) for g in CONSTANT_GAINS[1:]]
+    rows += [row_result(f"lqg gain {g:g}", "tip", "nominal", 0.019 / g) for g in CONSTANT_GAINS[1:]]
     rows += [
-        row(f"lqg fuzzy ks {k:g}", "tip", "nominal", 0.005) for k in FUZZY_KS
+        row_result(f"lqg fuzzy ks {k:g}", "tip", "nominal", 0.005) for k in FUZZY_KS
     ]  # beats 0.0038? no
-    rows += [row(f"lqg gain {g:g}", "point:1:0.5", "nominal", 0.03) for g in CONSTANT_GAINS[1:]]
-    rows += [row(f"lqg fuzzy ks {k:g}", "point:1:0.5", "nominal", 0.02) for k in FUZZY_KS]
+    rows += [
+        row_result(f"lqg gain {g:g}", "point:1:0.5", "nominal", 0.03) for g in CONSTANT_GAINS[1:]
+    ]
+    rows += [row_result(f"lqg fuzzy ks {k:g}", "point:1:0.5", "nominal", 0.02) for k in FUZZY_KS]
     b = Beyond(chosen, rows, alpha_limit=0.8)
     targets = {(t["sensor"], t["target"]): t for t in _targets(b)}
     assert targets[("tip", "rms_error_m <= 0.02")]["met"] is True

@@ -9,14 +9,8 @@ import sys
 
 import pytest
 
-from flexarm.cli import build_parser, main
-
-
-def run(capsys, *argv):
-    status = main(list(argv))
-    out, err = capsys.readouterr()
-    return status, out, err
-
+from flexarm.cli import build_parser
+from helpers.cli import error_line, help_text, run
 
 COMMANDS = ("reproduce", "simulate", "sweep", "identify", "calibrate", "modes")  # the API contract
 
@@ -24,10 +18,7 @@ COMMANDS = ("reproduce", "simulate", "sweep", "identify", "calibrate", "modes") 
 def test_help_lists_every_command(capsys):
     status, _, _ = run(capsys)
     assert status == 0
-    with pytest.raises(SystemExit) as exc:
-        main(["--help"])
-    assert exc.value.code == 0
-    listing = capsys.readouterr().out
+    listing = help_text(capsys)
     rows = [line.split() for line in listing.splitlines()]
     for name in COMMANDS:  # each starts a line of the listing
         assert any(row[:1] == [name] for row in rows), name
@@ -40,17 +31,11 @@ def test_help_lists_every_command(capsys):
 
 @pytest.mark.parametrize("name", COMMANDS)
 def test_every_command_has_help(capsys, name):
-    with pytest.raises(SystemExit) as exc:
-        main([name, "--help"])
-    assert exc.value.code == 0
-    assert capsys.readouterr().out.startswith(f"usage: flexarm {name}")
+    assert help_text(capsys, name).startswith(f"usage: flexarm {name}")
 
 
 def test_modes_help(capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(["modes", "--help"])
-    assert exc.value.code == 0
-    assert "--length" in capsys.readouterr().out
+    assert "--length" in help_text(capsys, "modes")
 
 
 def test_modes_prints_the_paper_arm(capsys):
@@ -90,22 +75,13 @@ def test_modes_reports_linearised_frequencies_with_joints(capsys, joints):
     assert "joints" in out
 
 
+#: A unit link given on the command line (length, flexural rigidity, linear density).
+UNIT_LINK = ("--length", "1", "--flexural-rigidity", "1", "--linear-density", "1")
+
+
 def test_modes_for_a_link_on_the_command_line(capsys):
-    status, out, _ = run(
-        capsys,
-        "modes",
-        "--length",
-        "1",
-        "--flexural-rigidity",
-        "1",
-        "--linear-density",
-        "1",
-        "--tip-mass",
-        "1",
-        "--n-modes",
-        "2",
-        "--json",
-    )
+    argv = ("modes", *UNIT_LINK, "--tip-mass", "1", "--n-modes", "2", "--json")
+    status, out, _ = run(capsys, *argv)
     assert status == 0
     roots = json.loads(out)["links"][0]["roots"]
     assert roots[0] == pytest.approx(1.24792, abs=1e-5)  # tip-mass ratio 1 (Blevins)
@@ -129,20 +105,7 @@ def test_modes_for_a_link_on_the_command_line(capsys):
         (["modes", "--normalization", "unit"], "--normalization"),
         (["modes", "--tip-mass", "1"], "--tip-mass"),
         (["modes", "--joints", "elastic"], "--joints"),
-        (
-            [
-                "modes",
-                "--length",
-                "1",
-                "--flexural-rigidity",
-                "1",
-                "--linear-density",
-                "1",
-                "--joints",
-                "linear",
-            ],
-            "--joints",
-        ),
+        (["modes", *UNIT_LINK, "--joints", "linear"], "--joints"),
         (["modes", "--bogus"], "--bogus"),
         (["nonsense"], "nonsense"),
     ],
@@ -151,10 +114,7 @@ def test_bad_input_is_one_line_with_status_2(capsys, argv, needle):
     status, out, err = run(capsys, *argv)
     assert status == 2
     assert out == ""
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert needle in lines[0]
-    assert "Traceback" not in err
+    assert needle in error_line(err)
 
 
 def test_console_script_runs_without_traceback():

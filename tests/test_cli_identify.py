@@ -14,6 +14,7 @@ import flexarm.ident.fits
 import flexarm.ident.regression.convergence
 from flexarm.cli import main
 from flexarm.ident import SemiRecursiveKernelRegression
+from helpers.cli import error_line, run, strict_json
 from helpers.ident import files_fixture, samples_fixture  # noqa: F401 (the fixtures)
 
 N = 400
@@ -43,17 +44,9 @@ FIT_KEYS = {
 }
 
 
-def run(capsys, *argv):
-    status = main(["identify", *(str(a) for a in argv)])
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
-def strict_json(text):
-    def refuse(name):
-        raise ValueError(f"non-standard JSON constant {name}")
-
-    return json.loads(text, parse_constant=refuse)
+def identify(capsys, *argv):
+    """``flexarm identify ARGV``: the status, stdout and stderr."""
+    return run(capsys, "identify", *argv)
 
 
 # ------------------------------------------------------------------ fitting
@@ -62,7 +55,7 @@ def strict_json(text):
 def test_json_summary_and_estimate(capsys, files, samples):
     x, y = samples
     argv = ["fit", files["csv"], "--x", "u", "--y", "w", "--json", "--grid", 64]
-    status, out, err = run(capsys, *argv)
+    status, out, err = identify(capsys, *argv)
     assert status == 0, err
     s = strict_json(out)
     assert set(s) == FIT_KEYS
@@ -83,7 +76,9 @@ def test_formats_and_columns_give_the_same_estimate(capsys, files):
         [files["npz"], "--x", "u", "--y", "w"],
         [files["table"], "--x", "1", "--y", "2"],
     ):
-        status, out, err = run(capsys, "fit", *argv, "--json", "--grid", 32, "--bandwidth", 0.3)
+        status, out, err = identify(
+            capsys, "fit", *argv, "--json", "--grid", 32, "--bandwidth", 0.3
+        )
         assert status == 0, err
         results.append(strict_json(out)["estimate"]["m"])
     for r in results[1:]:
@@ -92,7 +87,7 @@ def test_formats_and_columns_give_the_same_estimate(capsys, files):
 
 def test_out_writes_csv_png_and_summary(capsys, files, tmp_path):
     out_dir = tmp_path / "res"
-    status, out, err = run(
+    status, out, err = identify(
         capsys,
         "fit",
         files["npz"],
@@ -120,13 +115,13 @@ def test_out_writes_csv_png_and_summary(capsys, files, tmp_path):
 
 def test_series_equals_direct_sums(capsys, files):
     argv = ["fit", files["npz"], "--x", "u", "--y", "w", "--json", "--decay", 0, "--grid", 40]
-    _, out, _ = run(capsys, *argv)
-    status, out_series, err = run(capsys, *argv, "--series")
+    _, out, _ = identify(capsys, *argv)
+    status, out_series, err = identify(capsys, *argv, "--series")
     assert status == 0, err
     direct, series = strict_json(out)["estimate"]["m"], strict_json(out_series)["estimate"]["m"]
     assert strict_json(out_series)["series"] is True
     np.testing.assert_allclose(series, direct, rtol=1e-12)
-    status, _, err = run(capsys, "fit", files["npz"], "--series")  # decay 0.2: refused
+    status, _, err = identify(capsys, "fit", files["npz"], "--series")  # decay 0.2: refused
     assert status == 2 and "'series'" in err
 
 
@@ -137,7 +132,7 @@ def test_drop_nan_reports_the_count(capsys, tmp_path, samples):
     rows[3] = f"{float(x[3])!r},"
     rows[10] = f"nan,{float(y[10])!r}"
     p.write_text("u,w\n" + "\n".join(rows) + "\n")
-    status, out, err = run(capsys, "fit", p, "--drop-nan", "--json", "--grid", 16)
+    status, out, err = identify(capsys, "fit", p, "--drop-nan", "--json", "--grid", 16)
     assert status == 0, err
     s = strict_json(out)
     assert s["dropped_nan_rows"] == 2 and s["n_samples"] == N - 2
@@ -186,11 +181,10 @@ def test_errors_are_one_line_with_status_2_and_nothing_written(
     data = make(tmp_path)
     out_dir = tmp_path / "out"
     before = sorted(p.name for p in tmp_path.iterdir())
-    status, out, err = run(capsys, "fit", data, "--out", out_dir, *extra)
+    status, out, err = identify(capsys, "fit", data, "--out", out_dir, *extra)
     assert status == 2
     assert out == ""
-    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
-    assert err.startswith("flexarm identify fit: error:")
+    assert error_line(err).startswith("flexarm identify fit: error:")
     assert pytest.importorskip("re").search(match, err), err
     assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written
 
@@ -199,15 +193,15 @@ def test_out_not_empty_is_refused(capsys, tmp_path, files):
     out_dir = tmp_path / "full"
     out_dir.mkdir()
     (out_dir / "keep.txt").write_text("mine")
-    status, _, err = run(capsys, "fit", files["csv"], "--out", out_dir)
+    status, _, err = identify(capsys, "fit", files["csv"], "--out", out_dir)
     assert status == 2 and "not an empty directory" in err
     assert [p.name for p in out_dir.iterdir()] == ["keep.txt"]
 
 
 def test_no_subcommand_or_no_data_is_an_error(capsys):
-    status, _, err = run(capsys)
+    status, _, err = identify(capsys)
     assert status == 2 and "fit,study,hammerstein" in err and len(err.strip().splitlines()) == 1
-    status, _, err = run(capsys, "fit")
+    status, _, err = identify(capsys, "fit")
     assert status == 2 and "DATA" in err and len(err.strip().splitlines()) == 1
 
 
@@ -216,12 +210,12 @@ def test_no_subcommand_or_no_data_is_an_error(capsys):
 
 def test_study_json_and_out(capsys, tmp_path):
     argv = ["study", "--n-min", 100, "--n-max", 800, "--n-steps", 3, "--repetitions", 3]
-    status, out, err = run(capsys, *argv, "--seed", 5, "--json")
+    status, out, err = identify(capsys, *argv, "--seed", 5, "--json")
     assert status == 0, err
     s = strict_json(out)
     assert s["mode"] == "study" and s["n"] == [100, 283, 800] and len(s["mise"]) == 3
     assert s["theory_slope"] == pytest.approx(-0.8) and s["seed"] == 5
-    status, out2, err = run(capsys, *argv, "--seed", 5, "--out", tmp_path / "st", "--json")
+    status, out2, err = identify(capsys, *argv, "--seed", 5, "--out", tmp_path / "st", "--json")
     assert status == 0, err
     again = strict_json(out2)
     assert again["mise"] == s["mise"]  # seeded: the same numbers
@@ -235,11 +229,11 @@ def test_study_json_and_out(capsys, tmp_path):
 
 
 def test_study_bad_options(capsys, tmp_path):
-    status, _, err = run(capsys, "study", "--n-min", 500, "--n-max", 100)
+    status, _, err = identify(capsys, "study", "--n-min", 500, "--n-max", 100)
     assert status == 2 and "--n-min 500" in err and "--n-max 100" in err
-    status, _, err = run(capsys, "study", "--function", "cosine")
+    status, _, err = identify(capsys, "study", "--function", "cosine")
     assert status == 2 and "--function" in err
-    status, _, err = run(capsys, "study", "--x", "u")
+    status, _, err = identify(capsys, "study", "--x", "u")
     assert status == 2 and "unrecognized arguments: --x" in err
 
 
@@ -263,9 +257,9 @@ def test_study_errors_are_one_line_with_status_2_and_nothing_written(
 ):
     out_dir = tmp_path / "out"
     argv = ["study", "--n-min", 20, "--n-max", 40, "--repetitions", 2, *extra]
-    status, out, err = run(capsys, *argv, "--out", out_dir)
+    status, out, err = identify(capsys, *argv, "--out", out_dir)
     assert status == 2 and out == ""
-    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    error_line(err)  # one line, no traceback
     assert pytest.importorskip("re").search(match, err), err
     assert not out_dir.exists()
 
@@ -273,7 +267,7 @@ def test_study_errors_are_one_line_with_status_2_and_nothing_written(
 def test_fit_files_hold_what_the_summary_says(capsys, files, tmp_path):
     out_dir = tmp_path / "res"
     argv = ["fit", files["csv"], "--x", "u", "--y", "w", "--grid", 30, "--out", out_dir]
-    status, out, err = run(capsys, *argv, "--json")
+    status, out, err = identify(capsys, *argv, "--json")
     assert status == 0, err
     s = strict_json(out)
     assert strict_json((out_dir / "summary.json").read_text()) == s

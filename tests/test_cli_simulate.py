@@ -15,33 +15,18 @@ import numpy as np
 import pytest
 
 import flexarm as fa
-from flexarm.cli import main
 from flexarm.model.joints import MakkarFriction
 from flexarm.sensing.delays import SEED_WAVE_SPEED, bending_group_speed, travel_delay
 from flexarm.sim import simulate
 from flexarm.sim.results import RESULT_FILES, SimulationResult
 from flexarm.sim.scenario import Scenario, load_scenario
 from flexarm.sim.scenario_schema import ScenarioError, apply_overrides
+from helpers.cli import error_line, help_text, run, strict_json
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "paper_square.toml"
 FILES = {"result.npz", "summary.json", "timeseries.csv", "tracking.png"}
 REQUIRED = ("rms_error_m", "max_error_m", "sim_time_s", "wall_time_s")
-
-
-def run(capsys, *argv):
-    status = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
-def strict_json(text):
-    """Parse JSON, refusing NaN and Infinity (not JSON)."""
-
-    def refuse(name):
-        raise ValueError(f"non-standard JSON constant {name}")
-
-    return json.loads(text, parse_constant=refuse)
 
 
 def run_json(capsys, *argv):
@@ -359,13 +344,11 @@ def _assert_one_line_status_2(capsys, tmp_path, argv, needle, keep=()):
     status, out, err = run(capsys, "simulate", *argv, "--out", out_dir)
     assert status == 2
     assert out == ""
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert needle in lines[0]
-    assert "Traceback" not in err
+    line = error_line(err)
+    assert needle in line
     assert not out_dir.exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(keep)  # nothing written
-    return lines[0]
+    return line
 
 
 @pytest.mark.parametrize(("argv", "needle"), BAD_OPTIONS, ids=lambda x: str(x))
@@ -423,9 +406,7 @@ def test_a_diverging_run_exits_1_with_one_line_and_keeps_the_partial_run(capsys,
 
 def _help_paragraph(capsys, name):
     """The paragraph of ``flexarm simulate --help`` that starts with ``name:``, one line."""
-    with pytest.raises(SystemExit):
-        main(["simulate", "--help"])
-    text = capsys.readouterr().out
+    text = help_text(capsys, "simulate")
     start = text.index(f"\n{name}: ") + 1
     end = text.find("\n\n", start)
     return " ".join(text[start : end if end > 0 else None].split())
@@ -472,17 +453,11 @@ def test_a_diverging_run_without_out_writes_nothing(capsys, tmp_path):
 
 # ------------------------------------------------------------------ help, console script
 def test_help_lists_simulate(capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(["--help"])
-    assert exc.value.code == 0
-    assert "simulate" in capsys.readouterr().out
+    assert "simulate" in help_text(capsys)
 
 
 def test_simulate_help(capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(["simulate", "--help"])
-    assert exc.value.code == 0
-    text = " ".join(capsys.readouterr().out.split())  # help wraps lines
+    text = " ".join(help_text(capsys, "simulate").split())  # help wraps lines
     for needle in ("--scenario", "--sensor", "--delay", "--shaper", "--out", "1 ms", "exit status"):
         assert needle in text
 

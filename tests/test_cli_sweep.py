@@ -14,11 +14,11 @@ import time
 
 import pytest
 
-from flexarm.cli import main
 from flexarm.sweeps import execute
 from flexarm.sweeps.driver import sweep
 from flexarm.sweeps.journal import JOURNAL_FILE, read_journal
 from flexarm.sweeps.table import SweepTable
+from helpers.cli import help_text, run, strict_json
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "sweep_noise.toml"
@@ -36,19 +36,6 @@ seed = 3
 "simulation.seed" = { distribution = "integers", low = 0, high = 1000 }
 """
 FILES = {"sweep.json", "journal.jsonl", "runs.csv", "runs.parquet", "summary.json"}
-
-
-def run(capsys, *argv):
-    status = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
-def strict_json(text):
-    def refuse(name):
-        raise ValueError(f"non-standard JSON constant {name}")
-
-    return json.loads(text, parse_constant=refuse)
 
 
 @pytest.fixture
@@ -327,10 +314,8 @@ def test_missing_extras_are_named(capsys, small, tmp_path, monkeypatch):
 
 
 def test_help(capsys):
-    with pytest.raises(SystemExit) as info:
-        main(["sweep", "--help"])
-    out, _ = capsys.readouterr()
-    assert info.value.code == 0 and "--scheduler" in out and "exit status" in out
+    out = help_text(capsys, "sweep")
+    assert "--scheduler" in out and "exit status" in out
     from flexarm.cli import build_parser
 
     assert "sweep" in build_parser().format_help()

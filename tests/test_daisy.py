@@ -17,7 +17,7 @@ import sys
 import numpy as np
 import pytest
 
-from flexarm.ident import ARMA, fit_percent
+from flexarm.ident import ARMA, HammersteinIdentifier, IdentificationWarning, fit_percent
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "identify_daisy.py"
@@ -115,6 +115,56 @@ def test_daisy_hammerstein_identifier_matches_the_arx_baseline():
     assert base_fit >= arx_fit - 2.0, (base_fit, arx_fit)
 
 
+def best_arx_fit(u, y, n_fit):
+    """The best free-run fit on ``y[n_fit:]`` of least-squares ARX over orders 1-10 fitted
+    on the first ``n_fit`` samples (the example's NumPy ARX; unstable orders skipped)."""
+    fits = []
+    for order in range(1, 11):
+        try:
+            model = ex.arx(u[:n_fit], y[:n_fit], order)
+        except ValueError:
+            continue
+        fits.append(fit_percent(y[n_fit:], model.filter(u)[n_fit:]))
+    return max(fits)
+
+
+@needs_data
+def test_daisy_the_linear_model_wins_and_is_returned():
+    """This arm's nonlinearity is not a static input map: on its held-out blocks no
+    Hammerstein structure beats the best linear ARX over orders 1-10; the identifier
+    returns the linear model, whose free run on the unseen last third is as good as the
+    best least-squares ARX of any order there."""
+    u, y = ex.load_daisy(DATA)
+    res = ex.identify(u, y)
+    ham = res["hammerstein"][1]
+    comp = ham.report_.comparison
+    assert comp.winner == "linear" and comp.recommended == "identifier"
+    assert comp.orders == tuple(range(1, 11)) and not ham.report_.nonlinear_helps
+    assert ham.grid_.shape[0] == 2 and ham.recommended_ is ham  # the linear model
+    assert res["hammerstein"][0] >= best_arx_fit(u, y, res["n_fit"]) - 0.5
+
+
+@needs_data
+def test_daisy_a_given_order_recommends_the_best_linear_model_loudly():
+    """order=4 is too low for this arm: the Hammerstein model of that order is 20 points
+    worse on the last third than the best ARX; the identifier must compare it with every
+    linear order (not ARX(4) alone), warn, and recommend a baseline that is not worse."""
+    u, y = ex.load_daisy(DATA)
+    n_fit = 683
+    with pytest.warns(IdentificationWarning, match="does not beat the best linear model"):
+        low = HammersteinIdentifier(order=4).fit(u[:n_fit], y[:n_fit])
+    comp = low.report_.comparison
+    assert comp.winner == "linear" and comp.recommended == "baseline"
+    assert comp.orders == tuple(range(1, 11)) and comp.linear_order >= 6
+    assert comp.margin < -comp.standard_error  # worse, by more than a standard error
+    best = best_arx_fit(u, y, n_fit)
+    own = fit_percent(y[n_fit:], low.predict(u)[n_fit:])
+    rec = low.recommended_
+    assert rec is low.baseline_ and rec.order_ >= 6
+    assert own < best - 15.0
+    assert fit_percent(y[n_fit:], rec.predict(u)[n_fit:]) >= best - 0.5
+
+
 @needs_data
 def test_daisy_script_runs(tmp_path):
     png = tmp_path / "daisy.png"
@@ -128,4 +178,5 @@ def test_daisy_script_runs(tmp_path):
     assert res.returncode == 0, res.stderr
     assert "least-squares ARX" in res.stdout and "sine sweep" in res.stdout
     assert "correlated path" in res.stdout and "linear baseline" in res.stdout
+    assert "does not beat the best linear model" in res.stdout
     assert png.stat().st_size > 0

@@ -160,3 +160,79 @@ def test_estimator_file_is_the_hyperparameters_plus_the_accumulator_state(tmp_pa
         "grid",
         "binned",
     }
+
+
+# ---------------------------------------------------- exact mode's windows: every sample's bits
+
+
+@pytest.mark.parametrize("kernel", KERNELS)
+@pytest.mark.parametrize("decay", [0.0, 0.5])
+def test_exact_windows_equal_the_sum_over_every_sample_bitwise(kernel, decay):
+    """Exact mode (d = 1) visits each sample's window of the sorted query points only; every
+    point gets the bits of the plain loop over every sample (zero weights skipped)."""
+    from flexarm.ident.regression.accumulators import _loops
+
+    rng = np.random.default_rng(21)
+    X = np.r_[rng.uniform(0, 1, 400), rng.normal(0.3, 1e-3, 100)][:, None]
+    y = np.sin(7 * X[:, 0]) - 0.5 + 0.1 * rng.standard_normal(500)
+    q = np.r_[rng.uniform(-0.5, 1.5, 60), X[:20, 0], X[:5, 0], 0.3, 0.3, 9.0][:, None]
+    s = smoothing(kernel, (0.2,), decay, block=64)
+    acc = fed(ExactSamples(s), X, y, cuts=(10, 64, 300))
+    every = _loops.exact_predict(s.code, q, acc.X, acc.y, acc.h, acc.scale, 64)
+    got = acc.evaluate(q)
+    np.testing.assert_array_equal(got, every)
+    assert np.isnan(got[-1]) and not np.isnan(got[60:-1]).any()  # 9.0: beyond every window
+    ref = eq14(q, X, y, (0.2,), decay, kernel)
+    np.testing.assert_allclose(got, ref, rtol=1e-11, atol=1e-13, equal_nan=True)
+    assert acc.evaluate(np.zeros((0, 1))).shape == (0,)
+
+
+def test_window_search_is_searchsorted():
+    """The bucket-guided search of the windows returns ``np.searchsorted`` on any sorted
+    points (even, uneven, repeated, a tiny span far from 0, a huge outlier, one point),
+    from its own table's guesses and from guesses that are wrong by any amount."""
+    from flexarm.ident.regression.accumulators._loops import locate, search_table
+
+    rng = np.random.default_rng(22)
+    cases = [
+        np.linspace(-1, 1, 257),
+        np.sort(rng.normal(0, 1, 200) ** 3),
+        1e10 + np.sort(rng.integers(0, 5, 100)) * 1e-6,
+        np.r_[np.zeros(50), 1e300],
+        np.sort(rng.choice([-3.0, 0.0, 5e-324, 2.0], 80)),
+        np.array([0.25]),
+    ]
+    for gs in cases:
+        floats, table = search_table(gs)
+        wrong = rng.integers(0, len(gs) + 1, table.shape[0])  # guesses off by any amount
+        near = np.r_[gs, np.nextafter(gs, np.inf), np.nextafter(gs, -np.inf)]
+        values = np.r_[near, rng.uniform(gs[0] - 1, gs[-1] + 1, 200), np.inf, -np.inf, 1e308]
+        for right, side in ((False, "left"), (True, "right")):
+            expected = np.searchsorted(gs, values, side=side)
+            for guesses in (table, wrong):
+                got = [locate(gs, v, right, floats, guesses) for v in values]
+                np.testing.assert_array_equal(got, expected)
+
+
+def test_series_at_many_points_equals_each_point_alone_bitwise():
+    """The series is evaluated cluster by cluster over the run of sorted points in reach;
+    each point must get the bits it gets alone (its clusters' terms in cluster order), in
+    the compiled evaluation and in exact mode (unsorted, repeated points)."""
+    from flexarm.ident.regression.kernels import gauss_series_eval, gauss_series_moments
+
+    X, y = data(5000, seed=23)
+    q = np.r_[np.random.default_rng(24).uniform(-0.3, 1.3, 40), 0.5, 0.5, 3.0]
+    h, origin, clusters = 0.04, -1.7, 400
+    mn, md = np.zeros((clusters, 28)), np.zeros((clusters, 28))
+    gauss_series_moments(X[:, 0], y, 1.0, origin, h, mn, md)
+    qs = np.sort(q)
+    together = gauss_series_eval(qs, origin, h, mn, md)
+    alone = [gauss_series_eval(np.array([v]), origin, h, mn, md) for v in qs]
+    for k in range(3):
+        np.testing.assert_array_equal(together[k], [a[k][0] for a in alone])
+    assert np.all(together[1][:-1] > 0) and together[1][-1] == 0.0  # 3.0: no cluster in reach
+
+    acc = fed(ExactSamples(smoothing("gaussian", (h,), 0.0, series=True)), X, y)
+    m = acc.evaluate(q[:, None])
+    np.testing.assert_array_equal(m, np.concatenate([acc.evaluate(np.array([[v]])) for v in q]))
+    assert np.isfinite(m[:-1]).all() and np.isnan(m[-1])  # 3.0: 50 h away

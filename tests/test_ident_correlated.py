@@ -14,7 +14,6 @@ import warnings
 
 import numpy as np
 import pytest
-from scipy.signal import lfilter
 
 from flexarm.ident import (
     EXAMPLE_ARMA,
@@ -26,35 +25,9 @@ from flexarm.ident import (
     Saturation,
     simulate_hammerstein,
 )
+from helpers.ident import ar1, multisine, scaled, sweep
 
 N = 20_000
-
-
-def scaled(x):
-    """``x`` mapped so that its 1 % and 99 % quantiles sit at -2 and 2."""
-    lo, hi = np.quantile(x, [0.01, 0.99])
-    return (x - 0.5 * (lo + hi)) * 4.0 / (hi - lo)
-
-
-def sweep(n, rng):
-    """Linear chirp from 0.001 to 0.4 cycles/sample over the record (random start phase)."""
-    k = np.arange(n)
-    phase = 2 * np.pi * (0.001 * k + 0.5 * (0.4 - 0.001) * k**2 / n)
-    return scaled(np.sin(phase + rng.uniform(0, 2 * np.pi)))
-
-
-def multisine(n, rng):
-    """Random-phase multisine: every harmonic of 1/n up to 0.4 cycles/sample, unit amplitude."""
-    spectrum = np.zeros(n // 2 + 1, complex)
-    k = np.arange(1, int(0.4 * n))
-    spectrum[k] = np.exp(1j * rng.uniform(0, 2 * np.pi, k.shape[0]))
-    return scaled(np.fft.irfft(spectrum, n))
-
-
-def ar1(n, rng):
-    """AR(1) noise, coefficient 0.9 (500 samples of transient dropped)."""
-    e = rng.standard_normal(n + 500)
-    return scaled(lfilter([1.0], [1.0, -0.9], e)[500:])
 
 
 INPUTS = {"sweep": sweep, "multisine": multisine, "ar1": ar1}

@@ -20,32 +20,26 @@ def _tool(name: str) -> list[str] | None:
     return [found] if found else None
 
 
-def test_ruff_clean():
+TREES = ("src", "tests", "benchmarks", "examples", "docs")
+
+
+def _ruff_passes(*args):
+    """``ruff ARGS`` over the source trees exits with status 0 (skipped without ruff)."""
     ruff = _tool("ruff")
     if ruff is None:
         pytest.skip("ruff is not installed (pip install -e '.[test]')")
     res = subprocess.run(
-        [*ruff, "check", "src", "tests", "benchmarks", "examples", "docs"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        check=False,
+        [*ruff, *args, *TREES], cwd=ROOT, capture_output=True, text=True, check=False
     )
     assert res.returncode == 0, res.stdout + res.stderr
+
+
+def test_ruff_clean():
+    _ruff_passes("check")
 
 
 def test_ruff_format_clean():
-    ruff = _tool("ruff")
-    if ruff is None:
-        pytest.skip("ruff is not installed (pip install -e '.[test]')")
-    res = subprocess.run(
-        [*ruff, "format", "--check", "src", "tests", "benchmarks", "examples", "docs"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        check=False,
-    )
-    assert res.returncode == 0, res.stdout + res.stderr
+    _ruff_passes("format", "--check")
 
 
 def test_mypy_clean():

@@ -27,7 +27,7 @@ import pytest
 from flexarm.cli import main
 from flexarm.figures import FigureFormat, figure_bytes
 from flexarm.studies.reproduction import CONTROLLER_KINDS, reproduce
-from flexarm.studies.reproduction.beyond import ROWS, Beyond, RowResult
+from flexarm.studies.reproduction.beyond import ROWS, Beyond
 from flexarm.studies.reproduction.html import DISPLAY_PX_PER_INCH
 from flexarm.studies.reproduction.report import (
     FIGURE_SIZES,
@@ -35,6 +35,7 @@ from flexarm.studies.reproduction.report import (
     OUTPUT_FILES,
     output_files,
 )
+from helpers.reproduction import row_result
 
 MAGIC = {"png": b"\x89PNG\r\n\x1a\n", "pdf": b"%PDF-", "svg": b"<?xml"}
 
@@ -43,17 +44,7 @@ def _beyond() -> Beyond:
     """The study beyond the paper, made by hand (its own test runs it)."""
 
     def row(law, sensor, name, rms):
-        gone = rms is None
-        return RowResult(
-            law=law,
-            sensor=sensor,
-            row=name,
-            status="diverged" if gone else "ok",
-            diverged_at_s=1.25 if gone else None,
-            rms_error_m=rms,
-            max_error_m=None if gone else 3 * rms,
-            max_torque_Nm=None if gone else 41.234,
-        )
+        return row_result(law, sensor, name, rms, torque=41.234, diverged_at=1.25)
 
     rows = [row("lqg default", s, r.name, 0.0123) for s in ("tip", "point:1:0.5") for r in ROWS]
     rows += [

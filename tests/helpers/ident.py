@@ -13,23 +13,29 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.signal import lfilter
 
 from flexarm.ident import KERNELS
 from flexarm.ident.regression.accumulators import Smoothing
 
 __all__ = [
     "PROFILES",
+    "ar1",
+    "arx_free_run",
     "column_files",
     "eq14",
     "fed",
     "files_fixture",
+    "multisine",
     "regression_data",
     "same_state",
     "samples_fixture",
     "saturation_samples",
+    "scaled",
     "silverman",
     "smoothing",
     "sums14",
+    "sweep",
 ]
 
 #: The one-dimensional kernel profiles, written out again here.
@@ -157,3 +163,46 @@ def samples_fixture():
 def files_fixture(tmp_path, samples):
     """The fixture ``files``: the ``samples`` as data files (:func:`column_files`)."""
     return column_files(tmp_path, *samples)
+
+
+# ------------------------------------------------------------ inputs of the Hammerstein tests
+
+
+def scaled(x):
+    """``x`` mapped so that its 1 % and 99 % quantiles sit at -2 and 2."""
+    lo, hi = np.quantile(x, [0.01, 0.99])
+    return (x - 0.5 * (lo + hi)) * 4.0 / (hi - lo)
+
+
+def sweep(n, rng):
+    """Linear chirp from 0.001 to 0.4 cycles/sample over the record (random start phase)."""
+    k = np.arange(n)
+    phase = 2 * np.pi * (0.001 * k + 0.5 * (0.4 - 0.001) * k**2 / n)
+    return scaled(np.sin(phase + rng.uniform(0, 2 * np.pi)))
+
+
+def multisine(n, rng):
+    """Random-phase multisine: every harmonic of 1/n up to 0.4 cycles/sample, unit amplitude."""
+    spectrum = np.zeros(n // 2 + 1, complex)
+    k = np.arange(1, int(0.4 * n))
+    spectrum[k] = np.exp(1j * rng.uniform(0, 2 * np.pi, k.shape[0]))
+    return scaled(np.fft.irfft(spectrum, n))
+
+
+def ar1(n, rng):
+    """AR(1) noise, coefficient 0.9 (500 samples of transient dropped)."""
+    e = rng.standard_normal(n + 500)
+    return scaled(lfilter([1.0], [1.0, -0.9], e)[500:])
+
+
+def arx_free_run(u_fit, y_fit, order, u):
+    """Least-squares ARX(order, order) of ``(u_fit, y_fit)`` about their means, written out
+    with NumPy (``y_n = sum a_i y_{n-i} + sum_{j=0}^{order} b_j u_{n-j}``), and its free run
+    from rest on ``u``."""
+    uc, yc = u_fit - u_fit.mean(), y_fit - y_fit.mean()
+    rows = [
+        np.r_[yc[t - order : t][::-1], uc[t - order : t + 1][::-1]] for t in range(order, len(yc))
+    ]
+    coef = np.linalg.lstsq(np.array(rows), yc[order:], rcond=None)[0]
+    a, b = coef[:order], coef[order:]
+    return lfilter(b, np.r_[1.0, -a], u - u_fit.mean()) + y_fit.mean()

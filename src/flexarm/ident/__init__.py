@@ -14,8 +14,9 @@ Two estimator families, each a subpackage:
   the paper's correlation approach for a white input
   (:mod:`~flexarm.ident.hammerstein.white`), the ARX-Hammerstein path for a
   correlated one (:mod:`~flexarm.ident.hammerstein.correlated`), the choice by
-  :mod:`~flexarm.ident.hammerstein.whiteness`, the linear baseline, predictions
-  and scores, bootstrap bands, the fit's report, and the test systems
+  :mod:`~flexarm.ident.hammerstein.whiteness`, the linear baseline and the
+  comparison with the best linear model, predictions and scores, bootstrap
+  bands, the fit's report, and the test systems
   (:mod:`~flexarm.ident.hammerstein.systems`).
 
 What serves both stays here: the names of the choices
@@ -65,6 +66,7 @@ _NAMES = {
     "two_point_normalisation": "hammerstein.solution",
     "HammersteinIdentifier": "hammerstein.identifier",
     "Bands": "hammerstein.bootstrap",
+    "Comparison": "hammerstein.comparison",
     "IdentificationReport": "hammerstein.report",
     "IdentificationWarning": "hammerstein.whiteness",
     "LinearARX": "hammerstein.linear",
@@ -95,6 +97,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run
     from .fits import fit_hammerstein as fit_hammerstein
     from .fits import fit_regression as fit_regression
     from .hammerstein.bootstrap import Bands as Bands
+    from .hammerstein.comparison import Comparison as Comparison
     from .hammerstein.correlated.selection import Selection as Selection
     from .hammerstein.identifier import HammersteinIdentifier as HammersteinIdentifier
     from .hammerstein.linear import LinearARX as LinearARX

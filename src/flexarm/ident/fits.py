@@ -340,6 +340,8 @@ class HammersteinFit:
             "baseline": report["baseline"],
             "nonlinear_helps": report["nonlinear_helps"],
             "loses_to_baseline": report["loses_to_baseline"],
+            "winner": report["winner"],
+            "comparison": report["comparison"],
             "warnings": report["warnings"],
             "bands": None if self.bands is None else self.bands.summary(),
             "nonlinearity": {"x": self.grid.tolist(), "phi": self.phi.tolist()},

@@ -13,7 +13,9 @@ of two paths:
 Both produce one :class:`~flexarm.ident.hammerstein.solution.Solution`. Beside
 them: the test systems (:mod:`~flexarm.ident.hammerstein.systems`), the
 choice of path (:mod:`~flexarm.ident.hammerstein.whiteness`), the linear
-baseline (:mod:`~flexarm.ident.hammerstein.linear`), predictions and scores
+baseline (:mod:`~flexarm.ident.hammerstein.linear`) and the comparison with the
+best linear model on a validation part (:mod:`~flexarm.ident.hammerstein.comparison`),
+predictions and scores
 (:mod:`~flexarm.ident.hammerstein.prediction`), bootstrap bands
 (:mod:`~flexarm.ident.hammerstein.bootstrap`) and the fit's report
 (:mod:`~flexarm.ident.hammerstein.report`).
@@ -29,6 +31,7 @@ from ..._lazy import attach
 
 _SUBMODULES = (
     "bootstrap",
+    "comparison",
     "correlated",
     "identifier",
     "linear",
@@ -43,6 +46,7 @@ _NAMES = {
     "ARMA": "systems",
     "ARMAFit": "solution",
     "Bands": "bootstrap",
+    "Comparison": "comparison",
     "Cubic": "systems",
     "DeadZone": "systems",
     "EXAMPLE_ARMA": "systems",
@@ -69,6 +73,7 @@ __getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
 
 if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run time
     from .bootstrap import Bands as Bands
+    from .comparison import Comparison as Comparison
     from .correlated.selection import Selection as Selection
     from .identifier import HammersteinIdentifier as HammersteinIdentifier
     from .linear import LinearARX as LinearARX

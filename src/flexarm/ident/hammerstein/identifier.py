@@ -18,8 +18,13 @@ whiteness test (:func:`~flexarm.ident.hammerstein.whiteness.whiteness_test`: Lju
 McLeod–Li) and the record is long enough for it, the correlated path
 otherwise. Forcing ``method="white"`` on a coloured input warns
 (:class:`~flexarm.ident.hammerstein.whiteness.IdentificationWarning`). Every fit is reported
-beside its linear baseline (:class:`~flexarm.ident.LinearARX`, same data); a
-model that loses to it is flagged and warned about.
+beside its linear baseline (:class:`~flexarm.ident.LinearARX`, same data) and
+compared, on a validation part of the record, with the best linear model over
+the orders searched (:mod:`~flexarm.ident.hammerstein.comparison`:
+``report_.comparison`` says which won and by how much). Where the linear model
+wins, the correlated path returns it (its structure is the baseline's); with a
+given order, and on the white path, the identifier keeps its model and
+recommends the baseline by a warning (:attr:`~HammersteinIdentifier.recommended_`).
 
 Defaults and scale (white path)
 -------------------------------
@@ -53,22 +58,23 @@ from typing import Any, Self
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..._validation import check_array
+from ..._validation import check_array, check_int
 from ...errors import InvalidValueError
 from .._estimator import NotFittedError, SavedEstimator, frozen_params
 from ..regression.bandwidth import Silverman
 from ..regression.estimators import SemiRecursiveKernelRegression
+from ._attributes import SolutionAttributes
 from ._params import check_length, choose_path, correlated_orders, validate
 from ._state import HammersteinState, state_arrays, state_from_arrays
 from .bootstrap import Bands, bootstrap_bands
+from .comparison import Comparison, compare_outputs, correlated_comparison, white_comparison
 from .correlated.hatbasis import evaluate, locate
 from .correlated.selection import Selection
 from .correlated.solve import solve_correlated
 from .linear import LinearARX, baseline_fit
-from .prediction import Scored, check_input, check_record, fit_percent, max_lag, predict_output
+from .prediction import Scored, check_input, check_record, fit_percent, predict_output
 from .report import IdentificationReport, build_report
 from .solution import KnownPoints, Solution
-from .systems import ARMA
 from .white.lags import LagRegressions, solve_white
 from .whiteness import DEFAULT_ALPHA, IdentificationWarning, WhitenessReport
 
@@ -81,7 +87,7 @@ _OWNER = "HammersteinIdentifier"
 DEFAULT_BANDWIDTH = Silverman(0.55)
 
 
-class HammersteinIdentifier(Scored, SavedEstimator[HammersteinState]):
+class HammersteinIdentifier(Scored, SolutionAttributes, SavedEstimator[HammersteinState]):
     """Identify a Hammerstein system from input/output data (module docstring).
 
     Parameters
@@ -118,8 +124,10 @@ class HammersteinIdentifier(Scored, SavedEstimator[HammersteinState]):
     n_knots : int or "auto", default "auto"
         Knots of ``phi`` on the correlated path (``>= 2``; 2 is linear), or chosen.
     validation_fraction : float, default 0.25
-        Trailing fraction held out to choose the correlated path's structure and
-        the baseline's order, in (0, 0.5].
+        Fraction held out, in (0, 0.5]: as interleaved blocks to choose the
+        correlated path's structure and the baseline's order (and to compare the
+        model with the best linear one), the trailing part to compare the white
+        path's model with it.
     alpha : float, default 0.001
         Level of the whiteness test (:mod:`flexarm.ident.hammerstein.whiteness`).
 
@@ -133,6 +141,8 @@ class HammersteinIdentifier(Scored, SavedEstimator[HammersteinState]):
         The input's whiteness (None after :meth:`partial_fit` alone).
     baseline_ : LinearARX
         The linear baseline fitted to the same record.
+    recommended_ : HammersteinIdentifier or LinearARX
+        The model to use (this one, or the baseline where a linear model won).
     selection_ : Selection
         Correlated path: the structures tried on held-out data.
     n_samples_ : int
@@ -237,14 +247,15 @@ class HammersteinIdentifier(Scored, SavedEstimator[HammersteinState]):
             validation_fraction=p["validation_fraction"],
         )
         if path == "white":
-            self.partial_fit(ua, ya)
             baseline.fit(ua, ya)
+            comparison = self._stream_white(p, ua, ya, baseline.order_)
         else:
             self._start_correlated(p, ua, ya)
             result = self._fitted_state().result
             assert result is not None
             fit = baseline_fit(ua, ya, result.selection, p["n_lags"], frozen_params(baseline))
             baseline = LinearARX.from_state(fit)
+            comparison = correlated_comparison(result.selection)
         self._set_state(replace(self._fitted_state(), whiteness=white, baseline=baseline))
         report = build_report(
             p,
@@ -257,11 +268,27 @@ class HammersteinIdentifier(Scored, SavedEstimator[HammersteinState]):
             baseline,
             baseline.fit_percent(ua, ya),
             notes,
+            comparison,
         )
         self._set_state(replace(self._fitted_state(), report=report))
         for note in report.warnings:
             warnings.warn(note, IdentificationWarning, stacklevel=2)
         return self
+
+    def _stream_white(self, p: dict[str, Any], u: F64, y: F64, base: int) -> Comparison | None:
+        """The white path's fit, streamed in two chunks (bit for bit one fit): the model of
+        the leading part is compared on the trailing ``validation_fraction`` with the
+        best linear model (None if the leading part is too short for a model)."""
+        n = u.shape[0]
+        n_est = n - max(1, round(p["validation_fraction"] * n))
+        self.partial_fit(u[:n_est], y[:n_est])
+        lags = self._fitted_state().lags
+        sol = self._solution() if lags is not None and lags.ready else None
+        self.partial_fit(u[n_est:], y[n_est:])
+        if sol is None:
+            return None
+        top = correlated_orders(p, baseline=True)[1]
+        return white_comparison(u, y, sol, n_est, max_order=top, baseline_order=base)
 
     def _start_correlated(self, p: dict[str, Any], u: F64, y: F64) -> None:
         order, top = correlated_orders(p)
@@ -350,6 +377,61 @@ class HammersteinIdentifier(Scored, SavedEstimator[HammersteinState]):
         return report
 
     @property
+    def recommended_(self) -> HammersteinIdentifier | LinearARX:
+        """The model to use: this identifier, or its :attr:`baseline_` where a linear model
+        beat the Hammerstein model on the validation part and the identifier's own model
+        is not that linear model (``report_.comparison.recommended``)."""
+        comparison = self.report_.comparison
+        if comparison is not None and comparison.recommended == "baseline":
+            return self.baseline_
+        return self
+
+    def compare(
+        self, u: ArrayLike, y: ArrayLike, steps_ahead: int | None = None, skip: int = 0
+    ) -> Comparison:
+        """This model beside its linear :attr:`baseline_` on the data ``(u, y)``: which wins
+        (by more than the batch-means standard error of the mean square errors) and by how
+        much; :meth:`score` and :meth:`fit_percent` score this model alone.
+
+        Parameters
+        ----------
+        u, y : array_like, shape (n,)
+            Input and measured output (units of ``u`` and ``y``), e.g. data not fitted.
+        steps_ahead : int, optional
+            ``k >= 1``: of the k-step predictions; None: of the free runs from rest.
+        skip : int, default 0
+            Samples at the start run through but not scored (``0 <= skip < n``): a
+            record's estimation part, say, so that the free runs start from rest there.
+
+        Returns
+        -------
+        Comparison
+        """
+        ua, ya = check_record(u, y, f"{_OWNER}.compare")
+        start = check_int(skip, "skip", f"{_OWNER}.compare", minimum=0)
+        if start >= ua.shape[0]:
+            raise InvalidValueError(
+                f"The 'skip' parameter of {_OWNER}.compare must be below the {ua.shape[0]} "
+                f"samples given. Got {start} instead."
+            )
+        base = self.baseline_
+        given = ya if steps_ahead else None
+        st = self.report_.structure
+        label = (
+            f"order {st['order']}, {st['n_knots']} knots"
+            if self.method_ == "correlated"
+            else f"white path, ARMA order {self.order_}"
+        )
+        return compare_outputs(
+            ya,
+            self.predict(ua, given, steps_ahead),
+            base.predict(ua, given, steps_ahead),
+            model=label,
+            order=base.order_,
+            skip=start,
+        )
+
+    @property
     def whiteness_(self) -> WhitenessReport | None:
         """The input's whiteness (None after :meth:`partial_fit` alone)."""
         return self._fitted_state().whiteness
@@ -413,61 +495,6 @@ class HammersteinIdentifier(Scored, SavedEstimator[HammersteinState]):
         sol = solve_white(state.checked, lags)
         self._set_state(replace(state, solution=sol))
         return sol
-
-    @property
-    def impulse_response_(self) -> F64:
-        """``lambda_0 .. lambda_{L-1}``, shape (n_lags,)."""
-        return self._solution().impulse.copy()
-
-    @property
-    def nonlinearity_(self) -> F64:
-        """The identified ``phi`` on :attr:`grid_`, shape (g,)."""
-        return self._solution().nonlinearity.copy()
-
-    @property
-    def shape_(self) -> F64:
-        """The unnormalised shape of ``phi`` on :attr:`grid_`, shape (g,)."""
-        return self._solution().shape.copy()
-
-    @property
-    def grid_(self) -> F64:
-        """Points (units of ``u``) where ``phi`` is estimated, shape (g,)."""
-        return self._solution().grid.copy()
-
-    @property
-    def input_weights_(self) -> F64:
-        """Share of the inputs at each point of :attr:`grid_` (sums to 1), shape (g,)."""
-        return self._solution().weights.copy()
-
-    @property
-    def arma_(self) -> ARMA:
-        """The ARMA model of the linear part."""
-        return self._solution().arma.model
-
-    @property
-    def order_(self) -> int:
-        """The ARMA order ``l`` in use."""
-        return self._solution().arma.order
-
-    @property
-    def max_lag_(self) -> int:
-        """``max(p, q)``: the initial conditions :meth:`predict` takes from ``y``."""
-        return max_lag(self._solution().arma.model)
-
-    @property
-    def criterion_(self) -> dict[int, float]:
-        """Criterion of each order tried (BIC/AIC, or the held-out MSE at the chosen knots)."""
-        return dict(self._solution().arma.criterion)
-
-    @property
-    def offset_(self) -> float:
-        """Output offset added by :meth:`predict`, units of ``y``."""
-        return self._solution().offset
-
-    @property
-    def singular_values_(self) -> F64:
-        """Singular values of the rank-one array (rank one if Hammerstein)."""
-        return self._solution().singular_values.copy()
 
     # ---------------------------------------------------------------- model use
 

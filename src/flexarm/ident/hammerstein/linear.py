@@ -9,8 +9,10 @@ free-run error (:mod:`flexarm.ident.hammerstein.correlated.arx`), the order by t
 one-standard-error rule on the free-run error of the held-out tail
 (:mod:`flexarm.ident.hammerstein.correlated.selection`), then the chosen order refitted to the
 whole record. Every :class:`~flexarm.ident.HammersteinIdentifier` fit is
-reported beside this baseline of the same data: a nonlinear model that does
-not beat it has found no nonlinearity worth its parameters.
+reported beside this baseline of the same data, and compared on a validation
+part with the best linear model over the orders searched
+(:mod:`flexarm.ident.hammerstein.comparison`): a nonlinear model that does not
+beat it has found no nonlinearity worth its parameters.
 """
 
 from __future__ import annotations

@@ -4,8 +4,10 @@
 :meth:`~flexarm.ident.HammersteinIdentifier.fit`: the path taken and why (the
 input's whiteness, :mod:`flexarm.ident.hammerstein.whiteness`), the structure and how it was
 chosen, the free-run fit of the model beside its linear baseline
-(:class:`~flexarm.ident.LinearARX`) on the same record, and the warnings
-raised (:class:`~flexarm.ident.hammerstein.whiteness.IdentificationWarning`). Plain
+(:class:`~flexarm.ident.LinearARX`) on the same record, the comparison with the
+best linear model on a validation part (:mod:`flexarm.ident.hammerstein.comparison`:
+which won, by how much, what to use), and the warnings raised
+(:class:`~flexarm.ident.hammerstein.whiteness.IdentificationWarning`). Plain
 values only, so that it is saved and loaded with the identifier.
 """
 
@@ -14,6 +16,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
+
+from .comparison import Comparison
 
 __all__ = ["IdentificationReport", "build_report"]
 
@@ -42,11 +46,16 @@ class IdentificationReport:
         The linear baseline (:class:`~flexarm.ident.LinearARX`): ``order``,
         ``estimator``, ``fit_percent`` (free run on the same record, %).
     nonlinear_helps : bool
-        Correlated path: the held-out selection chose a nonlinear model (it beat
-        every linear one by more than a standard error). White path: the model's
-        fit exceeds the baseline's on the record.
+        The Hammerstein model beat the best linear model on the validation part
+        (``comparison.winner == "hammerstein"``; without a comparison, its fit on
+        the record exceeds the baseline's).
     warnings : tuple of str
         The warnings raised by the fit (also issued as ``IdentificationWarning``).
+    comparison : Comparison or None
+        The Hammerstein model beside the best linear model over the orders
+        searched, on a validation part (:mod:`flexarm.ident.hammerstein.comparison`):
+        which won, by how much, what to use. None if the record was too short for
+        it (white path) or for a file saved before it existed.
     """
 
     method: str
@@ -58,6 +67,13 @@ class IdentificationReport:
     baseline: dict[str, Any]
     nonlinear_helps: bool
     warnings: tuple[str, ...] = field(default=())
+    comparison: Comparison | None = None
+
+    @property
+    def winner(self) -> str | None:
+        """``"hammerstein"`` or ``"linear"``: which won on the validation part (None
+        without a comparison)."""
+        return None if self.comparison is None else self.comparison.winner
 
     @property
     def loses_to_baseline(self) -> bool:
@@ -76,6 +92,8 @@ class IdentificationReport:
             "baseline": dict(self.baseline),
             "nonlinear_helps": self.nonlinear_helps,
             "loses_to_baseline": self.loses_to_baseline,
+            "winner": self.winner,
+            "comparison": None if self.comparison is None else self.comparison.summary(),
             "warnings": list(self.warnings),
         }
 
@@ -92,6 +110,7 @@ class IdentificationReport:
             dict(data["baseline"]),
             bool(data["nonlinear_helps"]),
             tuple(data["warnings"]),
+            None if data.get("comparison") is None else Comparison.from_summary(data["comparison"]),
         )
 
 
@@ -106,8 +125,10 @@ def build_report(
     baseline: Any,
     baseline_fit_percent: float,
     notes: list[str],
+    comparison: Comparison | None = None,
 ) -> IdentificationReport:
-    """The report of one fit (a model that loses to its baseline adds a note).
+    """The report of one fit (a model that loses to its baseline adds a note, and one that
+    the comparison on the validation part finds worse than a linear model recommends it).
 
     Parameters
     ----------
@@ -126,6 +147,8 @@ def build_report(
         :class:`~flexarm.ident.LinearARX`), %.
     notes : list of str
         Warnings so far (appended to).
+    comparison : Comparison, optional
+        The model beside the best linear model on the validation part.
     """
     if path == "white":
         structure: dict[str, Any] = {
@@ -134,7 +157,7 @@ def build_report(
             "order_rule": "bic" if p["order"] == "auto" else p["order"],
             "criterion": {str(k): v for k, v in solution.arma.criterion.items()},
         }
-        helps = bool(fit_percent > baseline_fit_percent)
+        helps = bool(fit_percent > baseline_fit_percent)  # without a comparison
     else:
         structure = {
             "order": result.fit.order,
@@ -145,7 +168,11 @@ def build_report(
             "selection": result.selection.summary(),
         }
         helps = bool(result.selection.nonlinear_helps)
-    if fit_percent < baseline_fit_percent:
+    if comparison is not None:
+        helps = comparison.winner == "hammerstein"
+        if comparison.recommended == "baseline":
+            notes.append(comparison.statement())
+    if fit_percent < baseline_fit_percent - 1e-9 * max(1.0, abs(baseline_fit_percent)):
         notes.append(
             f"the Hammerstein model's free-run fit ({fit_percent:.2f} %) is below its linear "
             f"baseline's ({baseline_fit_percent:.2f} %, ARX order {baseline.order_}) on the "
@@ -165,4 +192,5 @@ def build_report(
         },
         nonlinear_helps=helps,
         warnings=tuple(notes),
+        comparison=comparison,
     )

@@ -198,26 +198,81 @@ def gauss_series_moments(
     w = SERIES_WIDTH * h
     nk = mn.shape[0]
     p = mn.shape[1]
-    for i in range(x.shape[0]):
-        f = (x[i] - origin) / w
-        if not (f >= 0.0 and f < nk):  # outside the clusters (also keeps int() in range)
+    # Four samples at a time, their power series interleaved (four independent chains of
+    # products instead of one); each moment still receives its terms in sample order.
+    ks = np.empty(4, np.int64)
+    bs = np.empty(4)
+    es = np.empty(4)
+    eys = np.empty(4)
+    i = 0
+    while i < x.shape[0]:
+        c = 0
+        while c < 4 and i < x.shape[0]:
+            f = (x[i] - origin) / w
+            if f >= 0.0 and f < nk:  # inside the clusters (also keeps int() in range)
+                k = int(f)
+                b = (x[i] - (origin + (k + 0.5) * w)) / h
+                e = scale * math.exp(-0.5 * b * b)
+                ks[c], bs[c], es[c], eys[c] = k, b, e, e * y[i]
+                c += 1
+            i += 1
+        if c == 4:
+            k0, k1, k2, k3 = ks[0], ks[1], ks[2], ks[3]
+            b0, b1, b2, b3 = bs[0], bs[1], bs[2], bs[3]
+            e0, e1, e2, e3 = es[0], es[1], es[2], es[3]
+            f0, f1, f2, f3 = eys[0], eys[1], eys[2], eys[3]
+            for j in range(p):
+                md[k0, j] += e0
+                mn[k0, j] += f0
+                md[k1, j] += e1
+                mn[k1, j] += f1
+                md[k2, j] += e2
+                mn[k2, j] += f2
+                md[k3, j] += e3
+                mn[k3, j] += f3
+                e0 *= b0
+                f0 *= b0
+                e1 *= b1
+                f1 *= b1
+                e2 *= b2
+                f2 *= b2
+                e3 *= b3
+                f3 *= b3
             continue
-        k = int(f)
-        b = (x[i] - (origin + (k + 0.5) * w)) / h
-        e = scale * math.exp(-0.5 * b * b)
-        ey = e * y[i]
-        for j in range(p):
-            md[k, j] += e
-            mn[k, j] += ey
-            e *= b
-            ey *= b
+        for t in range(c):  # the last few samples, one at a time
+            k, b, e, ey = ks[t], bs[t], es[t], eys[t]
+            for j in range(p):
+                md[k, j] += e
+                mn[k, j] += ey
+                e *= b
+                ey *= b
+
+
+@nb.njit(cache=True, nogil=True)
+def _horner(
+    q: F64, ck: float, h: float, cn: F64, cd: F64, m0: int, m1: int, ts: F64, an: F64, ad: F64
+) -> None:  # pragma: no cover - compiled
+    """``t = (q[m] - ck) / h`` and the two series in ``t`` (coefficients ``cn``, ``cd``) by
+    Horner's rule, for the points ``m0 .. m1 - 1`` at once, into ``ts``, ``an``, ``ad[:m1-m0]``
+    (a loop over the points innermost, which the compiler vectorises)."""
+    p = cn.shape[0]
+    for r in range(m1 - m0):
+        ts[r] = (q[m0 + r] - ck) / h
+        an[r] = cn[p - 1]
+        ad[r] = cd[p - 1]
+    for j in range(p - 2, -1, -1):
+        cj = cn[j]
+        dj = cd[j]
+        for r in range(m1 - m0):
+            an[r] = an[r] * ts[r] + cj
+            ad[r] = ad[r] * ts[r] + dj
 
 
 @nb.njit(cache=True, nogil=True)
 def gauss_series_eval(
     q: F64, origin: float, h: float, mn: F64, md: F64
 ) -> tuple[F64, F64, F64]:  # pragma: no cover - compiled
-    """The sums ``N(x)``, ``D(x)`` at the points ``q`` from the moments (see above), scaled.
+    """The sums ``N(x)``, ``D(x)`` at the sorted points ``q`` from the moments (see above), scaled.
 
     Returns ``num``, ``den`` and ``shift`` with ``N = num exp(-shift)``,
     ``D = den exp(-shift)``: ``shift = t**2/2`` of the nearest non-empty
@@ -225,50 +280,66 @@ def gauss_series_eval(
     subnormal range (where direct summation loses its precision) before the
     ratio ``N / D = num / den`` is taken. ``den = 0`` exactly when no
     non-empty cluster lies within ``SERIES_REACH`` (no sample within 38.61 h).
+
+    ``q`` must be sorted (ascending): the loops run over the clusters, each over
+    the run of points in its reach (Horner's rule for all of them at once); every
+    point receives the clusters' terms in cluster order, so the result is that of
+    the loop over the points, each over its clusters, bit for bit.
     """
     w = SERIES_WIDTH * h
     nk = mn.shape[0]
     p = mn.shape[1]
+    g = q.shape[0]
     inv = np.empty(p)
     inv[0] = 1.0
     for j in range(1, p):
         inv[j] = inv[j - 1] / j
-    num = np.zeros(q.shape[0])
-    den = np.zeros(q.shape[0])
-    shift = np.zeros(q.shape[0])
-    for m in range(q.shape[0]):
+    klo = np.empty(g, np.int64)  # the clusters a point looks at: klo .. khi, both
+    khi = np.empty(g, np.int64)  # nondecreasing in the point, as q is sorted
+    for m in range(g):
         x = q[m]
-        flo = max(0.0, min(float(nk), (x - SERIES_REACH * h - origin) / w))
-        fhi = max(-1.0, min(nk - 1.0, (x + SERIES_REACH * h - origin) / w + 1.0))
-        klo = int(flo)
-        khi = int(fhi)
-        s0 = np.inf
-        for k in range(klo, khi + 1):
-            if md[k, 0] != 0.0:
-                t = (x - (origin + (k + 0.5) * w)) / h
-                if abs(t) <= SERIES_REACH:
-                    s0 = min(s0, 0.5 * t * t)
-        if s0 == np.inf:
+        klo[m] = int(max(0.0, min(float(nk), (x - SERIES_REACH * h - origin) / w)))
+        khi[m] = int(max(-1.0, min(nk - 1.0, (x + SERIES_REACH * h - origin) / w + 1.0)))
+    s0 = np.full(g, np.inf)  # t**2/2 of each point's nearest non-empty cluster in reach
+    m0 = m1 = 0
+    for k in range(nk):
+        while m1 < g and klo[m1] <= k:
+            m1 += 1
+        while m0 < m1 and khi[m0] < k:
+            m0 += 1
+        if md[k, 0] == 0.0:
             continue
-        shift[m] = s0
-        sn = 0.0
-        sd = 0.0
-        for k in range(klo, khi + 1):
-            if md[k, 0] == 0.0:
-                continue
-            t = (x - (origin + (k + 0.5) * w)) / h
-            if abs(t) > SERIES_REACH:
-                continue
-            g = math.exp(s0 - 0.5 * t * t)
-            if g == 0.0:
-                continue
-            an = mn[k, p - 1] * inv[p - 1]
-            ad = md[k, p - 1] * inv[p - 1]
-            for j in range(p - 2, -1, -1):
-                an = an * t + mn[k, j] * inv[j]
-                ad = ad * t + md[k, j] * inv[j]
-            sn += g * an
-            sd += g * ad
-        num[m] = sn
-        den[m] = sd
+        ck = origin + (k + 0.5) * w
+        for m in range(m0, m1):
+            t = (q[m] - ck) / h
+            if abs(t) <= SERIES_REACH:
+                s0[m] = min(s0[m], 0.5 * t * t)
+    num = np.zeros(g)
+    den = np.zeros(g)
+    cn = np.empty(p)
+    cd = np.empty(p)
+    ts = np.empty(g)
+    an = np.empty(g)
+    ad = np.empty(g)
+    m0 = m1 = 0
+    for k in range(nk):
+        while m1 < g and klo[m1] <= k:
+            m1 += 1
+        while m0 < m1 and khi[m0] < k:
+            m0 += 1
+        if md[k, 0] == 0.0 or m0 == m1:
+            continue
+        ck = origin + (k + 0.5) * w
+        for j in range(p):
+            cn[j] = mn[k, j] * inv[j]
+            cd[j] = md[k, j] * inv[j]
+        _horner(q, ck, h, cn, cd, m0, m1, ts, an, ad)
+        for r in range(m1 - m0):
+            t = ts[r]
+            if abs(t) <= SERIES_REACH:
+                gm = math.exp(s0[m0 + r] - 0.5 * t * t)
+                if gm != 0.0:
+                    num[m0 + r] += gm * an[r]
+                    den[m0 + r] += gm * ad[r]
+    shift = np.where(s0 == np.inf, 0.0, s0)
     return num, den, shift

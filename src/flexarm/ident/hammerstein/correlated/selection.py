@@ -20,11 +20,12 @@ Orders ``l = 1 .. max_order`` and knot counts on a geometric grid
 (:data:`KNOT_GRID`, ``K = 2`` being the linear model), with at least
 :data:`ROWS_PER_PARAMETER` estimation rows per parameter and at most
 :data:`MAX_PARAMS` parameters (the cost of a solution grows as their cube). The linear models
-(``K = 2``) are tried at every order: they are the baseline. The nonlinear
-ones are searched by coordinates: the orders at :data:`START_KNOTS` knots,
-then the knots at the best order, then the orders at the best knots, and so
-on until the pair repeats (at most :data:`ROUNDS` rounds; an order scan stops
-after :data:`PATIENCE` orders without improvement).
+(``K = 2``) are tried at every order ``1 .. max_order``, also when the order of
+the nonlinear model is given: they are the baseline. The nonlinear ones are
+searched by coordinates: the orders at :data:`START_KNOTS` knots, then the
+knots at the best order, then the orders at the best knots, and so on until
+the pair repeats (at most :data:`ROUNDS` rounds; an order scan stops after
+:data:`PATIENCE` orders without improvement).
 
 Choice: the one-standard-error rule
 -----------------------------------
@@ -40,9 +41,14 @@ attainable error by about ``sigma**2 chi2_d / N`` (Akaike's final prediction
 error), of standard deviation ``sigma**2 sqrt(2 d) / N``; for two models,
 ``sigma**2 sqrt(2 (d_1 + d_2)) / N``, with ``sigma**2`` the smallest
 validation error. The same rule restricted to ``K = 2`` chooses the linear
-baseline; the nonlinear part **helps** only if the chosen model is nonlinear,
-i.e. it beats every linear model by more than a standard error — otherwise the
-structure chosen is the baseline's.
+baseline. A nonlinear model is kept only if it **beats the best linear model**
+(the smallest validation error over every order tried) by more than the
+standard error of their difference: the rule is applied to those nonlinear
+candidates alone; if there is none, the linear model wins and the structure
+chosen is the baseline's (with a given order: the linear model of that order,
+the baseline recommended beside it). :attr:`Selection.winner` says which won,
+:attr:`Selection.margin` by how much, on the held-out part
+(``Selection.part``).
 
 A record longer than :data:`SELECTION_SAMPLES` samples chooses its structure
 on an excerpt: the blocks become windows of ``SELECTION_SAMPLES / (5 p)``
@@ -87,9 +93,17 @@ __all__ = [
     "VALIDATION_BLOCKS",
     "Candidate",
     "Selection",
+    "Split",
+    "batch_errors",
+    "beats",
     "design",
     "final_fit",
+    "held_part",
+    "linear_candidates",
     "select_structure",
+    "standard_error",
+    "trailing",
+    "validation_fit",
 ]
 
 F64 = NDArray[np.float64]
@@ -165,7 +179,7 @@ class Candidate:
         }
 
 
-def _standard_error(c: Candidate, ref: Candidate, rows: float) -> float:
+def standard_error(c: Candidate, ref: Candidate, rows: float) -> float:
     """Standard error of ``c.validation_mse - ref.validation_mse`` (module docstring).
 
     Batch means of the held-out errors, plus the spread of the two models'
@@ -183,9 +197,14 @@ def _one_se(cands: list[Candidate], rows: float) -> tuple[Candidate, Candidate]:
     within = [
         c
         for c in cands
-        if c is best or c.validation_mse - best.validation_mse <= _standard_error(c, best, rows)
+        if c is best or c.validation_mse - best.validation_mse <= standard_error(c, best, rows)
     ]
     return min(within, key=lambda c: (c.n_params, c.validation_mse)), best
+
+
+def beats(c: Candidate, ref: Candidate, rows: float) -> bool:
+    """Whether ``c``'s validation error is below ``ref``'s by more than a standard error."""
+    return ref.validation_mse - c.validation_mse > standard_error(c, ref, rows)
 
 
 @dataclass(frozen=True)
@@ -197,57 +216,109 @@ class Selection:
     candidates : tuple of Candidate
         Every structure tried, in the order tried.
     chosen : Candidate
-        The structure kept (one-standard-error rule).
+        The structure kept (one-standard-error rule; nonlinear only if it beats
+        ``best_linear``).
     best : Candidate
         The smallest validation error.
     linear : Candidate
         The linear baseline's structure (the same rule among ``K = 2``).
+    best_linear : Candidate
+        The linear model of smallest validation error, over every order tried.
     n_estimation, n_validation : int
         Samples of the two parts (interleaved blocks).
     stride : int
         Every ``stride``-th estimation row was summed (1: all).
     rows : float
         Estimation rows summed (the ``N`` of the standard errors).
+    part : str
+        Which samples validated (in words).
+    validation_variance : float
+        Mean square of the validation outputs about their mean (units of ``y``
+        squared): a validation error as a fit, ``100 (1 - sqrt(mse / variance))`` %.
     """
 
     candidates: tuple[Candidate, ...]
     chosen: Candidate
     best: Candidate
     linear: Candidate
+    best_linear: Candidate
     n_estimation: int
     n_validation: int
     stride: int
     rows: float
+    part: str
+    validation_variance: float
+
+    @property
+    def winner(self) -> str:
+        """``"hammerstein"`` if the chosen model is nonlinear and beats the best linear
+        model by more than a standard error, else ``"linear"``."""
+        won = not self.chosen.linear and beats(self.chosen, self.best_linear, self.rows)
+        return "hammerstein" if won else "linear"
 
     @property
     def nonlinear_helps(self) -> bool:
-        """Whether a nonlinear model beat every linear one by more than a standard error."""
-        return not self.chosen.linear
+        """Whether a nonlinear model beat the best linear one by more than a standard error."""
+        return self.winner == "hammerstein"
 
     @property
     def improvement(self) -> tuple[float, float]:
         """``(linear.validation_mse - chosen.validation_mse, its standard error)``."""
         diff = self.linear.validation_mse - self.chosen.validation_mse
-        return diff, _standard_error(self.linear, self.chosen, self.rows)
+        return diff, standard_error(self.linear, self.chosen, self.rows)
+
+    @property
+    def margin(self) -> tuple[float, float]:
+        """``(best_linear.validation_mse - chosen.validation_mse, its standard error)``:
+        positive where the chosen model is the better (units of ``y`` squared)."""
+        diff = self.best_linear.validation_mse - self.chosen.validation_mse
+        return diff, standard_error(self.chosen, self.best_linear, self.rows)
+
+    def fit_percent(self, c: Candidate) -> float:
+        """``c``'s validation error as a free-run fit on the validation part, %."""
+        return validation_fit(c.validation_mse, self.validation_variance)
 
     def summary(self) -> dict[str, object]:
-        """Plain values: the choice, the rule and every candidate."""
+        """Plain values: the choice, the rule, the winner and every candidate."""
         diff, se = self.improvement
+        margin, margin_se = self.margin
         return {
             "rule": "one standard error (batch means) on the free-run MSE of held-out blocks",
+            "part": self.part,
             "n_estimation": self.n_estimation,
             "n_validation": self.n_validation,
             "chosen": self.chosen.summary(),
             "best": self.best.summary(),
             "linear": self.linear.summary(),
+            "best_linear": self.best_linear.summary(),
+            "winner": self.winner,
             "nonlinear_helps": self.nonlinear_helps,
             "improvement_over_linear": diff if math.isfinite(diff) else None,
             "improvement_standard_error": se if math.isfinite(se) else None,
+            "margin_over_best_linear": margin if math.isfinite(margin) else None,
+            "margin_standard_error": margin_se if math.isfinite(margin_se) else None,
             "candidates": [c.summary() for c in self.candidates],
         }
 
 
-def design(n: int, validation_fraction: float) -> tuple[Design, NDArray[np.bool_], I64]:
+def validation_fit(mse: float, variance: float) -> float:
+    """A validation mean square error as a free-run fit, ``100 (1 - sqrt(mse / variance))`` %."""
+    if not math.isfinite(mse) or variance <= 0.0:
+        return -math.inf
+    return 100.0 * (1.0 - math.sqrt(mse / variance))
+
+
+def batch_errors(err: F64) -> F64:
+    """Means of the squared errors ``err`` over :data:`BATCHES` contiguous batches."""
+    parts = np.array_split(err, min(BATCHES, err.shape[0]))
+    return np.array([float(np.mean(p)) for p in parts])
+
+
+#: A split of a record: the estimation design, the held-out mask and the samples used.
+Split = tuple[Design, NDArray[np.bool_], I64]
+
+
+def design(n: int, validation_fraction: float) -> Split:
     """The split of an ``n``-sample record, or of its excerpt (module docstring).
 
     Returns the estimation :class:`~flexarm.ident.hammerstein.correlated.arx.Design`, the
@@ -285,11 +356,32 @@ def design(n: int, validation_fraction: float) -> tuple[Design, NDArray[np.bool_
     return Design(np.array(segments, dtype=np.int64), runs, mask), held, index
 
 
+def _ordinal(k: int) -> str:
+    suffix = "th" if 10 <= k % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(k % 10, "th")
+    return f"{k}{suffix}"
+
+
+def held_part(n: int, validation_fraction: float) -> str:
+    """The held-out part of an ``n``-sample record under :func:`design`, in words."""
+    period = max(2, round(1.0 / validation_fraction))
+    n_blocks = VALIDATION_BLOCKS * period
+    every = f"every {_ordinal(period)} of {n_blocks}"
+    if n <= SELECTION_SAMPLES:
+        return (
+            f"held-out blocks: {every} contiguous blocks of the record (the last one "
+            "included), each model simulated from rest over the whole record"
+        )
+    return (
+        f"held-out windows: {every} windows of {SELECTION_SAMPLES // n_blocks} samples spread "
+        f"evenly over the record, each simulated from rest over the {BURN_IN} samples before it"
+    )
+
+
 class _Search:
     """Candidates evaluated once each, on one estimation/validation split."""
 
-    def __init__(self, u: F64, y: F64, fraction: float, max_rows: int) -> None:
-        self.design, self.held, index = design(u.shape[0], fraction)
+    def __init__(self, u: F64, y: F64, split: Split, max_rows: int) -> None:
+        self.design, self.held, index = split
         self.u, self.y = u[index], y[index]
         est = self.design.mask
         self.u_sorted = np.sort(self.u[est])
@@ -326,9 +418,7 @@ class _Search:
         batches = np.full(BATCHES, np.inf)
         if fit is not None:
             y_hat = self.design.free_run(fit.b, fit.a, where.segment, where.position, fit.phi)
-            err = (self.y[self.held] - fit.offset - y_hat[self.held]) ** 2
-            parts = np.array_split(err, min(BATCHES, err.shape[0]))
-            batches = np.array([float(np.mean(p)) for p in parts])
+            batches = batch_errors((self.y[self.held] - fit.offset - y_hat[self.held]) ** 2)
         mse = float(np.mean(batches)) if fit is not None else math.inf
         if fit is not None and not math.isfinite(mse):
             fit, mse = None, math.inf
@@ -382,9 +472,10 @@ def _search(
     max_rows: int,
 ) -> _Search:
     """The candidates tried (module docstring: the linear ones, then by coordinates)."""
-    search = _Search(u, y, validation_fraction, max_rows)
-    orders = [order] if order is not None else list(range(1, max_order + 1))
-    search.scan_orders(2, orders, None)
+    search = _Search(u, y, design(u.shape[0], validation_fraction), max_rows)
+    every = list(range(1, max_order + 1))
+    orders = [order] if order is not None else every
+    search.scan_orders(2, every + [o for o in orders if o not in every], None)
     if n_knots is not None:
         search.scan_orders(n_knots, orders, PATIENCE if order is None else None)
     elif search.distinct > 2:
@@ -439,17 +530,73 @@ def select_structure(
     with one_blas_thread():
         search = _search(u, y, max_order, order, n_knots, validation_fraction, max_rows)
     good = [c for c in search.order if math.isfinite(c.validation_mse)]
-    linear = [c for c in good if c.linear]
-    if not good or not linear:
+    linear = [c for c in good if c.linear and c.order <= max_order]
+    eligible = [c for c in good if order is None or c.order == order]
+    if not eligible or not linear:
         return None
     rows = search.rows / search.stride
-    chosen, best = _one_se(good, rows)
-    lin, _ = _one_se(linear, rows)
-    if chosen.linear:  # no nonlinear model helps: the structure is the baseline's
+    best = min(good, key=lambda c: (c.validation_mse, c.n_params))
+    lin, best_linear = _one_se(linear, rows)
+    chosen, _ = _one_se(eligible, rows)
+    if not chosen.linear:  # kept only if it beats the best linear model
+        winners = [c for c in eligible if not c.linear and beats(c, best_linear, rows)]
+        fallback = [c for c in eligible if c.linear]
+        if winners:
+            chosen = _one_se(winners, rows)[0]
+        elif fallback:
+            chosen = _one_se(fallback, rows)[0]
+    if chosen.linear and order is None:  # no nonlinear model wins: the baseline's structure
         chosen = lin
-    held = int(np.count_nonzero(search.held))
+    held = search.held
     n_est = int(np.count_nonzero(search.design.mask))
-    return Selection(tuple(search.order), chosen, best, lin, n_est, held, search.stride, rows)
+    variance = float(np.var(search.y[held]))
+    return Selection(
+        tuple(search.order),
+        chosen,
+        best,
+        lin,
+        best_linear,
+        n_est,
+        int(np.count_nonzero(held)),
+        search.stride,
+        rows,
+        held_part(u.shape[0], validation_fraction),
+        variance,
+    )
+
+
+def trailing(n: int, n_estimation: int) -> Split:
+    """Estimate on the samples before ``n_estimation``, validate on the rest: one free run.
+
+    A record of at most :data:`SELECTION_SAMPLES` samples is used whole; a longer
+    one through a window of that many samples about ``n_estimation`` (three
+    quarters before it, at most), simulated from rest over the :data:`BURN_IN`
+    samples before the window.
+    """
+    if n <= SELECTION_SAMPLES:
+        run, start, stop = 0, 0, n
+    else:
+        start = n_estimation - min(n_estimation, 3 * SELECTION_SAMPLES // 4)
+        stop = min(n, start + SELECTION_SAMPLES)
+        run = max(0, start - BURN_IN)
+    m = stop - run
+    index = np.arange(run, stop, dtype=np.int64)
+    mask = (index >= start) & (index < n_estimation)
+    segments = np.array([[start - run, n_estimation - run]], dtype=np.int64)
+    runs = np.array([[0, m]], dtype=np.int64)
+    return Design(segments, runs, mask), index >= n_estimation, index
+
+
+def linear_candidates(
+    u: F64, y: F64, max_order: int, split: Split, max_rows: int = MAX_ROWS
+) -> tuple[list[Candidate], float]:
+    """The linear models of orders 1 to ``max_order`` fitted and validated on ``split``
+    (those with a stable fit), and the estimation rows summed."""
+    with one_blas_thread():
+        search = _Search(u, y, split, max_rows)
+        search.scan_orders(2, list(range(1, max_order + 1)), None)
+    good = [c for c in search.order if math.isfinite(c.validation_mse)]
+    return good, search.rows / search.stride
 
 
 def final_fit(u: F64, y: F64, cand: Candidate) -> StructureFit:

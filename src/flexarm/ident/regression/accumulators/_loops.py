@@ -15,22 +15,26 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from ..kernels import kernel_profile, kernel_weight
+from ..kernels import kernel_weight
 
 __all__ = [
     "GAUSS_ZERO",
+    "LOCATE_STEPS",
     "accumulate_rows",
     "add_totals",
     "band_update_1d",
     "exact_predict",
-    "exact_predict_1d",
+    "exact_sums_1d",
     "grid_update",
     "grid_update_1d",
+    "locate",
     "ratio",
     "sample_bandwidths",
+    "search_table",
 ]
 
 F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
 
 #: ``exp(-u**2 / 2) == 0.0`` exactly in float64 for ``|u| > 38.61`` (``u**2/2 > 745.2``).
 GAUSS_ZERO = 38.61
@@ -40,12 +44,17 @@ GAUSS_ZERO = 38.61
 def sample_bandwidths(
     bw: F64, decay: float, start: int, n: int, recursive: bool
 ) -> tuple[F64, F64]:  # pragma: no cover - compiled
-    """``h[k] = bw * i**(-decay)`` with ``i = start + k + 1``; scale ``prod(h)**-1`` or 1."""
+    """``h[k] = bw * i**(-decay)`` with ``i = start + k + 1``; scale ``prod(h)**-1`` or 1.
+
+    ``decay = 0`` takes ``i**(-0.0) = 1`` without calling ``pow`` (which returns
+    exactly 1 for a zero exponent).
+    """
     d = bw.shape[0]
     h = np.empty((n, d))
     scale = np.ones(n)
+    fixed = decay == 0.0
     for k in range(n):
-        f = float(start + k + 1) ** (-decay)
+        f = 1.0 if fixed else float(start + k + 1) ** (-decay)
         p = 1.0
         for j in range(d):
             h[k, j] = bw[j] * f
@@ -53,6 +62,64 @@ def sample_bandwidths(
         if recursive:
             scale[k] = 1.0 / p
     return h, scale
+
+
+#: Linear steps from a table's guess before :func:`locate` falls back to a binary search.
+LOCATE_STEPS = 8
+
+
+@nb.njit(cache=True, nogil=True)
+def search_table(gs: F64) -> tuple[F64, I64]:  # pragma: no cover - compiled
+    """Guesses for :func:`locate` on the sorted points ``gs``: ``2 g`` buckets over their span.
+
+    Returns ``floats = [g0, inv]`` (the first point, buckets per unit of the
+    points) and ``table[b] = #{gs < g0 + b / inv}``, ``b = 0 .. 2 g``. No
+    buckets (``inv = 0``) when the span is 0 or too small for them.
+    """
+    g = gs.shape[0]
+    if g == 0:
+        return np.zeros(2), np.zeros(1, np.int64)
+    span = gs[g - 1] - gs[0]
+    nb_ = 2 * g
+    inv = nb_ / span if span > 0.0 else 0.0
+    if not (0.0 < inv < 1e300):
+        inv = 0.0
+        nb_ = 0
+    table = np.empty(nb_ + 1, np.int64)
+    for b in range(nb_ + 1):
+        table[b] = np.searchsorted(gs, gs[0] + b / inv if b > 0 else gs[0], side="left")
+    floats = np.array([gs[0], inv])
+    return floats, table
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def locate(gs: F64, v: float, right: bool, floats: F64, table: I64) -> int:  # pragma: no cover
+    """``np.searchsorted(gs, v, side)`` (``side = "right"`` if ``right``), exactly.
+
+    Starts from the bucket table of :func:`search_table` and walks at most
+    :data:`LOCATE_STEPS` points each way; beyond that (or without a table), a
+    binary search. The walk stops only where the answer's defining inequalities
+    hold, so the result is ``searchsorted``'s whatever the guess.
+    """
+    g = gs.shape[0]
+    nb_ = table.shape[0] - 1
+    f = (v - floats[0]) * floats[1]
+    if not (f > 0.0):
+        k = 0
+    elif f >= nb_:
+        k = table[nb_]
+    else:
+        k = table[int(f)]
+    for _ in range(LOCATE_STEPS):
+        if k < g and (gs[k] <= v if right else gs[k] < v):
+            k += 1
+        elif k > 0 and (gs[k - 1] > v if right else gs[k - 1] >= v):
+            k -= 1
+        else:
+            return k
+    if right:
+        return int(np.searchsorted(gs, v, side="right"))
+    return int(np.searchsorted(gs, v, side="left"))
 
 
 @nb.njit(cache=True, nogil=True)
@@ -64,18 +131,19 @@ def grid_update_1d(
     Each sample visits only the grid points in its window (``|u| <= 1``, or
     ``38.61`` for the Gaussian, where its float64 value becomes exactly 0; the
     caller passes this ``radius``, smaller in binned mode), found by binary
-    search (padded; the kernel itself decides the edge). The weight is
+    search (:func:`locate`; padded, the kernel itself decides the edge). The weight is
     ``scale * k(u)``, the same floating-point operations as ``kernel_weight``
     (adding a zero weight, which that path skips, changes no sum).
     """
+    floats, table = search_table(gs)
     for i in range(x.shape[0]):
         xi = x[i]
         hi = h[i]
         si = scale[i]
         yi = y[i]
         r = radius * hi * (1.0 + 1e-9) + 1e-12 * abs(xi)
-        lo = np.searchsorted(gs, xi - r, side="left")
-        up = np.searchsorted(gs, xi + r, side="right")
+        lo = locate(gs, xi - r, False, floats, table)
+        up = locate(gs, xi + r, True, floats, table)
         if code == 0:
             for k in range(lo, up):
                 u = (gs[k] - xi) / hi
@@ -148,28 +216,33 @@ def exact_predict(
 
 
 @nb.njit(cache=True, nogil=True)
-def exact_predict_1d(
-    code: int, q: F64, x: F64, y: F64, h: F64, scale: F64, block: int
-) -> F64:  # pragma: no cover - compiled
-    """``d = 1`` version of :func:`exact_predict` on scalars (same operations, faster)."""
-    out = np.empty(q.shape[0])
+def exact_sums_1d(
+    code: int, qs: F64, x: F64, y: F64, h: F64, scale: F64, block: int, radius: float
+) -> tuple[F64, F64]:  # pragma: no cover - compiled
+    """``d = 1``: the sums of :func:`exact_predict` at the sorted points ``qs``, windowed.
+
+    Each block's partial sums are accumulated sample by sample onto the points
+    of each sample's window (:func:`grid_update_1d`, ``radius`` as there), then
+    added in block order. Every point receives the same weights, computed by
+    the same operations and added in the same order as :func:`exact_predict`
+    adds them (the zero weights it skips change no sum), so the sums are the
+    same bit for bit; the work is the window's points, not every point.
+    """
+    g = qs.shape[0]
     n = x.shape[0]
-    for m in range(q.shape[0]):
-        qm = q[m]
-        num = 0.0
-        den = 0.0
-        for a in range(0, n, block):
-            pn = 0.0
-            pd = 0.0
-            for i in range(a, min(n, a + block)):
-                w = scale[i] * kernel_profile(code, (qm - x[i]) / h[i])
-                if w != 0.0:
-                    pn += w * y[i]
-                    pd += w
-            num += pn
-            den += pd
-        out[m] = num / den if den != 0.0 else np.nan
-    return out
+    num = np.zeros(g)
+    den = np.zeros(g)
+    pn = np.empty(g)
+    pd = np.empty(g)
+    for a in range(0, n, block):
+        b = min(n, a + block)
+        pn[:] = 0.0
+        pd[:] = 0.0
+        grid_update_1d(code, qs, x[a:b], y[a:b], h[a:b], scale[a:b], pn, pd, radius)
+        for k in range(g):
+            num[k] += pn[k]
+            den[k] += pd[k]
+    return num, den
 
 
 @nb.njit(cache=True, nogil=True)
@@ -186,6 +259,7 @@ def band_update_1d(
     """
     g0 = gs[0]
     g1 = gs[gs.shape[0] - 1]
+    floats, table = search_table(gs)
     for i in range(x.shape[0]):
         xi = x[i]
         hi = h[i]
@@ -194,10 +268,10 @@ def band_update_1d(
         si = scale[i]
         yi = y[i]
         r = GAUSS_ZERO * hi * (1.0 + 1e-9) + 1e-12 * abs(xi)
-        lo = np.searchsorted(gs, xi - r, side="left")
-        up = np.searchsorted(gs, xi + r, side="right")
-        mid_lo = np.searchsorted(gs, xi - inner * hi, side="right")
-        mid_up = np.searchsorted(gs, xi + inner * hi, side="left")
+        lo = locate(gs, xi - r, False, floats, table)
+        up = locate(gs, xi + r, True, floats, table)
+        mid_lo = locate(gs, xi - inner * hi, True, floats, table)
+        mid_up = locate(gs, xi + inner * hi, False, floats, table)
         for k in range(lo, min(up, mid_lo)):
             u = (gs[k] - xi) / hi
             w = si * math.exp(-0.5 * u * u)

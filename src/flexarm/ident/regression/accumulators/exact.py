@@ -22,12 +22,25 @@ _KEYS = ("X", "y", "h", "scale")
 EXACT_SERIES_MAX_CLUSTERS = 2**18
 
 
+def _window_work(qs: F64, h: F64, radius: float) -> float:
+    """About the number of (sample, point) pairs within the samples' windows of the sorted
+    points ``qs`` (points spread evenly; ``h`` the samples' bandwidths)."""
+    span = float(qs[-1] - qs[0]) if qs.shape[0] else 0.0
+    if span == 0.0:
+        return float(h.shape[0] * qs.shape[0])
+    return float(qs.shape[0]) * min(float(h.shape[0]), 2.0 * radius * float(h.sum()) / span)
+
+
 class ExactSamples(Accumulator):
     """The samples ``(X_i, Y_i, h_i, scale_i)``, stored with amortised growth.
 
     :meth:`evaluate` sums eq. 14 over every sample at each query point
-    (compiled, O(n) per point) in the blocked order of
-    :mod:`~flexarm.ident.regression.accumulators.blocks` — or, with ``setup.series``, by
+    (compiled) in the blocked order of
+    :mod:`~flexarm.ident.regression.accumulators.blocks`; with ``d = 1`` and a named
+    kernel, each sample visits only the query points in its window (sorted, as grid
+    mode visits its grid: ``O(n log m)`` plus the pairs within the windows, the same
+    bits as the loop over every pair), otherwise every pair (``O(n m)``) — or, with
+    ``setup.series``, by
     the Gaussian series (:func:`flexarm.ident.regression.kernels.gauss_series_moments`)
     when the clusters do not outnumber the samples (nor exceed
     ``EXACT_SERIES_MAX_CLUSTERS``), directly at the points far from every
@@ -47,6 +60,7 @@ class ExactSamples(Accumulator):
         self._y = np.empty(16)
         self._h = np.empty((16, d))
         self._scale = np.empty(16)
+        self._filled = 0  # rows of _h and _scale computed so far (on first use)
 
     @property
     def X(self) -> F64:
@@ -63,30 +77,42 @@ class ExactSamples(Accumulator):
     @property
     def h(self) -> F64:
         """Per-sample bandwidths ``h_i``, shape ``(n, d)``."""
+        self._fill()
         out: F64 = self._h[: self.n_samples]
         return out
 
     @property
     def scale(self) -> F64:
         """Per-sample weight factors (``prod_j h_ij**-1`` or 1), shape ``(n,)``."""
+        self._fill()
         out: F64 = self._scale[: self.n_samples]
         return out
 
+    def _fill(self) -> None:
+        """Compute ``h_i`` and the scales of the samples added since the last use (they
+        depend on the index ``i`` only; the Gaussian series needs neither)."""
+        n0, n = self._filled, self.n_samples
+        if n > n0:
+            self._h[n0:n], self._scale[n0:n] = self.setup.sample_bandwidths(n0, n - n0)
+            self._filled = n
+
     def _add(self, X: F64, y: F64) -> None:
         n0, m = self.n_samples, X.shape[0]
-        h, scale = self.setup.sample_bandwidths(n0, m)
         need = n0 + m
         if need > self._y.shape[0]:
             cap = max(need, 2 * self._y.shape[0])
-            for name in ("_X", "_y", "_h", "_scale"):
+            for name, rows in (
+                ("_X", n0),
+                ("_y", n0),
+                ("_h", self._filled),
+                ("_scale", self._filled),
+            ):
                 old = getattr(self, name)
                 new = np.empty((cap, *old.shape[1:]))
-                new[:n0] = old[:n0]
+                new[:rows] = old[:rows]
                 setattr(self, name, new)
         self._X[n0:need] = X
         self._y[n0:need] = y
-        self._h[n0:need] = h
-        self._scale[n0:need] = scale
 
     def evaluate(self, Q: F64) -> F64:
         if self.setup.series:
@@ -100,21 +126,30 @@ class ExactSamples(Accumulator):
         setup = self.setup
         X, y, h, s = self.X, self.y, self.h, self.scale
         b = setup.block
-        if setup.code != CALLABLE:  # the query points are independent: split them over the cores
-            out = np.empty(Q.shape[0])
-            q0, x0, h0 = np.ascontiguousarray(Q[:, 0]), X[:, 0], h[:, 0]
+        if setup.code == CALLABLE:
+            num, den = setup.blocked_callable_sums(Q, X, y, h, s)
+            r: F64 = _loops.ratio(num, den)
+            return r
+        out = np.empty(Q.shape[0])
+        if setup.d == 1:  # each sample's window of the sorted points, as grid mode sums
+            order = np.argsort(Q[:, 0], kind="stable")
+            qs, x0, h0 = np.ascontiguousarray(Q[order, 0]), X[:, 0], h[:, 0]
+            radius = _loops.GAUSS_ZERO if setup.code == 0 else 1.0
+            sorted_out = np.empty(Q.shape[0])
 
-            def part(i: int, j: int) -> None:
-                if setup.d == 1:
-                    out[i:j] = _loops.exact_predict_1d(setup.code, q0[i:j], x0, y, h0, s, b)
-                else:
-                    out[i:j] = _loops.exact_predict(setup.code, Q[i:j], X, y, h, s, b)
+            def window(i: int, j: int) -> None:
+                num, den = _loops.exact_sums_1d(setup.code, qs[i:j], x0, y, h0, s, b, radius)
+                sorted_out[i:j] = _loops.ratio(num, den)
 
-            run_split(Q.shape[0], workers(Q.shape[0] * X.shape[0], Q.shape[0]), part)
+            run_split(Q.shape[0], workers(_window_work(qs, h0, radius), Q.shape[0]), window)
+            out[order] = sorted_out
             return out
-        num, den = setup.blocked_callable_sums(Q, X, y, h, s)
-        r: F64 = _loops.ratio(num, den)
-        return r
+
+        def part(i: int, j: int) -> None:  # the query points are independent: split them
+            out[i:j] = _loops.exact_predict(setup.code, Q[i:j], X, y, h, s, b)
+
+        run_split(Q.shape[0], workers(Q.shape[0] * X.shape[0], Q.shape[0]), part)
+        return out
 
     def _series(self, Q: F64, X: F64, y: F64) -> F64 | None:
         """Series sums at ``Q`` (direct ones far from the data), or ``None`` where the
@@ -128,9 +163,12 @@ class ExactSamples(Accumulator):
         mn = np.zeros((clusters, SERIES_TERMS))
         md = np.zeros((clusters, SERIES_TERMS))
         gauss_series_moments(x0, y, self.setup.series_scale(), origin, hs, mn, md)
-        num, den, shift = gauss_series_eval(np.ascontiguousarray(Q[:, 0]), origin, hs, mn, md)
-        out: F64 = _loops.ratio(num, den)
-        far = far_points(den, shift)
+        order = np.argsort(Q[:, 0], kind="stable")
+        num, den, shift = gauss_series_eval(np.ascontiguousarray(Q[order, 0]), origin, hs, mn, md)
+        out = np.empty(Q.shape[0])
+        out[order] = _loops.ratio(num, den)
+        far = np.empty(Q.shape[0], dtype=np.bool_)
+        far[order] = far_points(den, shift)
         if far.any():
             out[far] = self._direct(np.ascontiguousarray(Q[far]))
         return out
@@ -142,3 +180,4 @@ class ExactSamples(Accumulator):
         self._X, self._y, self._h, self._scale = (
             np.array(state[k], dtype=np.float64, order="C") for k in _KEYS
         )
+        self._filled = self._y.shape[0]

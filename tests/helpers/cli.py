@@ -1,0 +1,45 @@
+"""What the command-line tests share: ``flexarm`` run in this process, and strict JSON."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import pytest
+
+from flexarm.cli import main
+
+__all__ = ["error_line", "help_text", "run", "strict_json"]
+
+
+def run(capsys: Any, *argv: object) -> tuple[int, str, str]:
+    """``flexarm ARGV`` in this process (each argument as ``str``): the exit status and
+    what it wrote to stdout and stderr (read through pytest's ``capsys``)."""
+    status = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def strict_json(text: str) -> Any:
+    """Parse JSON, refusing NaN and Infinity (not JSON)."""
+
+    def refuse(name: str) -> Any:
+        raise ValueError(f"non-standard JSON constant {name}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def help_text(capsys: Any, *argv: object) -> str:
+    """What ``flexarm ARGV --help`` prints to stdout; it must exit with status 0."""
+    with pytest.raises(SystemExit) as exc:
+        main([*(str(a) for a in argv), "--help"])
+    assert exc.value.code == 0
+    out: str = capsys.readouterr().out
+    return out
+
+
+def error_line(err: str) -> str:
+    """The one line a refused command writes to stderr (asserted: one line, no traceback)."""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err, err
+    return lines[0]
