@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import shutil
 import sys
@@ -15,7 +16,7 @@ from ..errors import InvalidTypeError, InvalidValueError
 from ..sensing.delays import DELAY_METHODS
 from ..sensing.sensors import SENSOR_MODELS, PointSensor, Sensor, parse_sensor
 from ..sim.animation import ANIMATION_FORMATS
-from ..sim.results import SimulationError, result_files
+from ..sim.results import SimulationError, SimulationResult, result_files
 from ..sim.scenario_schema import (
     CONTROLLERS,
     DELAY_MODELS,
@@ -180,6 +181,22 @@ def _format_summary(summary: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _json_text(summary: dict[str, Any], result: SimulationResult | None) -> str:
+    """What ``--json`` prints: the summary, and with ``result`` its time series (the
+    columns of ``timeseries.csv``, one list per column, non-finite values null) under
+    ``"series"``, each column on one line."""
+    text = json.dumps(summary, indent=2)
+    if result is None:
+        return text
+    header, table = result.table()
+    columns = [
+        f'    "{name}": ' + json.dumps([v if math.isfinite(v) else None for v in col.tolist()])
+        for name, col in zip(header, table.T, strict=True)
+    ]
+    series = ',\n  "series": {\n' + ",\n".join(columns) + "\n  }\n}"
+    return text[: text.rindex("}")].rstrip() + series
+
+
 def _check_animate(path: str | None) -> Path | None:
     """The ``--animate`` file, checked before anything runs: a .gif or .mp4 (ffmpeg on
     PATH) in an existing directory."""
@@ -197,6 +214,8 @@ def _check_animate(path: str | None) -> Path | None:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
+    if args.series and not args.json:
+        raise UsageError("flexarm simulate: error: argument --series: needs --json")
     scenario = _build_scenario(args)
     out = Path(os.path.abspath(args.out)) if args.out is not None else None
     if out is not None:
@@ -205,8 +224,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     fmt = figure_format(args, "flexarm simulate", out)
     files = list(result_files(fmt))
 
+    # the measurement and the reference are recorded only where something reads them
+    # (the files, the animation, the printed series): the summary's metrics do not
+    keep = out is not None or movie is not None or args.series
+    record = scenario.simulation.record_signals and keep
     try:
-        result = scenario.simulate(progress=None)
+        result = scenario.simulate(progress=None, record_signals=record)
         diverged = None
     except (InvalidValueError, InvalidTypeError) as exc:  # e.g. a path outside the workspace
         raise UsageError(f"flexarm simulate: error: {scenario.source}: {exc}") from None
@@ -255,10 +278,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         if args.json:
-            print(json.dumps(summary, indent=2))
+            print(_json_text(summary, result if args.series else None))
         return EXIT_FAILURE
     if args.json:
-        print(json.dumps(summary, indent=2))
+        print(_json_text(summary, result if args.series else None))
     else:
         print(_format_summary(summary))
         if out is not None:
@@ -398,5 +421,16 @@ def add_parser(sub: Any) -> None:
         "through Pillow, MP4 through ffmpeg, which must be on PATH)",
     )
     add_figure_options(sim)
-    sim.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
+    sim.add_argument(
+        "--json",
+        action="store_true",
+        help="print the JSON summary on stdout (the metrics, the settings and the run's "
+        "account, not the time series; what --out writes as summary.json)",
+    )
+    sim.add_argument(
+        "--series",
+        action="store_true",
+        help="with --json: also print the time series (the columns of timeseries.csv: t, "
+        'q, dq, tau, desired, reference and tip positions, error) under "series"',
+    )
     sim.set_defaults(func=_cmd_simulate)

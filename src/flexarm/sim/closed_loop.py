@@ -159,6 +159,7 @@ def simulate(
         "dt_s": s.dt,
         "substeps": s.substeps,
         "record_every": every,
+        "record_signals": s.record_signals,
         "method": s.method,
         "feedforward": setup.feedforward,
         "smoothing_s": s.smoothing,
@@ -174,14 +175,15 @@ def simulate(
     # the last row written: the instant the run reached, or the last one recorded before
     last_row = (k_end + every - 1) // every if status == 0 else k_end // every
     out = setup.loop.out
+    rows = setup.kept.shape[0]
     return assemble_result(
         arm,
         t=np.multiply(setup.kept, s.dt, dtype=np.float64),
         q=out.q,
         dq=out.dq,
         tau=out.tau,
-        measurement=out.y,
-        reference=out.r,
+        measurement=out.y if s.record_signals else np.empty((rows, 0)),
+        reference=out.r if s.record_signals else np.empty((rows, 0)),
         desired=out.desired,
         tip=out.tip if out.tip.shape[0] else None,
         diverged=status != 0,
@@ -228,6 +230,7 @@ def _set_up(
         duration=duration,
         substeps=s.substeps,
         record_every=s.record_every,
+        record_signals=s.record_signals,
     )
 
     # ------------------------------------------------------------ reference
@@ -301,6 +304,7 @@ def _set_up(
         tip_phi=basis(N - 1, float(arm.link_lengths[-1])) if record_tip and basis else None,
         reference=recorded_reference,  # type: ignore[arg-type]
         recorded=kept.shape[0],
+        record_signals=s.record_signals,
     )
     if s.check_sampling and isinstance(arm, FlexibleArm):
         from ..control.sampling import check_sampling as check
@@ -354,7 +358,9 @@ def _execute(
             reference, desired = pipeline.rows(k0, k1)
             ks = recorded_instants(k0, k1, n_steps, every)
             rows = (ks + every - 1) // every
-            loop.out.r[rows], loop.out.desired[rows] = reference[ks - k0], desired[ks - k0]
+            loop.out.desired[rows] = desired[ks - k0]
+            if loop.out.r.shape[0]:  # (no rows: the reference is not recorded)
+                loop.out.r[rows] = reference[ks - k0]
         noise = no_noise
         if setup.channels.noisy:  # drawn block by block, in order: the same stream at once
             noise = generator.normal(size=(k1 - k0, n_ch))
@@ -425,6 +431,7 @@ def check_budget(
     duration: float,
     substeps: int = 1,
     record_every: int = 1,
+    record_signals: bool = True,
     runs: int = 1,
     workers: int = 1,
     owner: str = _OWNER,
@@ -449,6 +456,9 @@ def check_budget(
         Control period and simulated time, s.
     substeps, record_every : int
         As for :func:`simulate`.
+    record_signals : bool
+        As for :func:`simulate`: whether the measurement and the reference are
+        recorded.
     runs, workers : int
         Runs of this size, and how many run at once.
     owner : str
@@ -469,7 +479,8 @@ def check_budget(
     n_y = measurement_size(N, sum(arm.n_modes))
     # per recorded row: t, q, dq, tau, measurement, reference, desired, tip, and the
     # assembly's temporaries (about as much again)
-    per_row = 8 * 2 * (1 + 2 * n + N + n_y + (6 + 4 * N) + 2 + 2)
+    signals = n_y + (6 + 4 * N) if record_signals else 0
+    per_row = 8 * 2 * (1 + 2 * n + N + signals + 2 + 2)
     link = sensor.resolve(arm)[0]
     n_ch = 2 * N if link < 0 else 4
     h = dt / substeps

@@ -1,7 +1,10 @@
 """Tracking metrics of a simulation, as functions of plain arrays.
 
 All errors are end-effector position errors in metres against the desired
-(unshaped, undelayed) path; times in seconds.
+(unshaped, undelayed) path; times in seconds, increasing (the control instants).
+Each metric is computed with as few passes and temporaries over the series as it
+needs (a long run has millions of rows), the same arithmetic in the same order as
+the plain NumPy expressions in the docstrings.
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ __all__ = [
     "control_effort",
     "corner_errors",
     "max_error",
+    "residual_start",
     "residual_vibration",
     "rms_error",
     "settling_time",
@@ -23,15 +27,29 @@ __all__ = [
 F64 = NDArray[np.float64]
 
 
+def _finite(x: F64) -> F64:
+    """``x[np.isfinite(x)]``, and ``x`` itself (no copy) when every sample is finite."""
+    finite = np.isfinite(x)
+    return x if finite.all() else x[finite]
+
+
+def _rms(x: F64) -> float:
+    """``sqrt(mean(x**2))`` of the finite samples of ``x`` (NaN if none)."""
+    e = _finite(x)
+    if not e.size:
+        return float("nan")
+    squares = np.square(e)  # (e**2: the same numbers)
+    return float(np.sqrt(np.mean(squares)))
+
+
 def rms_error(error: F64) -> float:
     """Root-mean-square of ``error`` (m), NaN samples ignored."""
-    e = error[np.isfinite(error)]
-    return float(np.sqrt(np.mean(e**2))) if e.size else float("nan")
+    return _rms(error)
 
 
 def max_error(error: F64) -> float:
     """Largest ``error`` (m), NaN samples ignored."""
-    e = error[np.isfinite(error)]
+    e = _finite(error)
     return float(e.max()) if e.size else float("nan")
 
 
@@ -46,11 +64,21 @@ def corner_errors(
         NaN for corners outside the simulated time.
     """
     out = np.full(len(corner_times), np.nan)
-    for i, tc in enumerate(corner_times):
-        sel = (t >= tc) & (t <= tc + window) & np.isfinite(error)
-        if np.any(sel):
-            out[i] = error[sel].max()
+    for i, tc in enumerate(corner_times):  # the rows t_c <= t <= t_c + window
+        a = int(np.searchsorted(t, tc, side="left"))
+        b = int(np.searchsorted(t, tc + window, side="right"))
+        e = _finite(error[a:b])
+        if e.size:
+            out[i] = e.max()
     return out
+
+
+def residual_start(t: F64, start: float) -> int:
+    """The first row of :func:`residual_vibration`'s window: the first ``t >= start``,
+    or of the last 10 % of the run if ``start`` is at or after its end."""
+    if start >= t[-1]:
+        start = t[-1] - 0.1 * (t[-1] - t[0])
+    return int(np.searchsorted(t, start, side="left"))
 
 
 def residual_vibration(t: F64, deflection: F64, start: float) -> float:
@@ -58,12 +86,13 @@ def residual_vibration(t: F64, deflection: F64, start: float) -> float:
 
     ``deflection`` is the distance between the end effector and where the rigid
     kinematics of the joint angles puts it. If ``start`` is at or after the end
-    of the run, the last 10 % of the run is used.
+    of the run, the last 10 % of the run is used (:func:`residual_start`). Only
+    those rows are read: ``deflection`` may hold just them (shape
+    ``(len(t) - residual_start(t, start),)``) instead of every row.
     """
-    if start >= t[-1]:
-        start = t[-1] - 0.1 * (t[-1] - t[0])
-    sel = (t >= start) & np.isfinite(deflection)
-    return float(np.sqrt(np.mean(deflection[sel] ** 2))) if np.any(sel) else float("nan")
+    k = residual_start(t, start)
+    window = deflection[k:] if deflection.shape[0] == t.shape[0] else deflection
+    return _rms(window)
 
 
 def settling_time(t: F64, error: F64, start: float, tolerance: float) -> float:
@@ -86,10 +115,14 @@ def settling_time(t: F64, error: F64, start: float, tolerance: float) -> float:
 
 def control_effort(t: F64, tau: F64) -> float:
     """``int sum_i tau_i**2 dt`` in N**2 m**2 s (trapezoid rule, NaN rows dropped)."""
-    ok = np.all(np.isfinite(tau), axis=1)
-    kept = np.count_nonzero(ok)
-    if kept < 2:
-        return float("nan")
-    if kept < ok.shape[0]:  # (a diverged run's last rows; else no copies)
+    if not np.isfinite(tau).all():  # (a diverged run's last rows; else no copies)
+        ok = np.all(np.isfinite(tau), axis=1)
         tau, t = tau[ok], t[ok]
-    return float(np.trapezoid(np.einsum("ij,ij->i", tau, tau), t))
+    if tau.shape[0] < 2:
+        return float("nan")
+    # np.trapezoid(y, t), y = sum_i tau_i**2, in place: sum(diff(t) * (y[1:] + y[:-1]) / 2)
+    y = np.einsum("ij,ij->i", tau, tau)
+    pairs = np.add(y[1:], y[:-1])
+    pairs *= np.subtract(t[1:], t[:-1], out=y[:-1])  # (y's rows are read: reused)
+    pairs /= 2.0
+    return float(np.add.reduce(pairs))

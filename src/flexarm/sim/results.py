@@ -140,18 +140,34 @@ class SimulationResult:
             out[:, i] = self.q[:, s] @ self.tip_deflection_gains[s]
         return out
 
+    def _rigid_tip(self, rows: slice) -> tuple[F64, F64]:
+        """:attr:`rigid_tip`'s x and y of ``rows`` (each row's numbers as in the whole)."""
+        phi = self.q[rows, : self.n_links].copy()  # absolute angles: a cumulative sum by column
+        for i in range(1, self.n_links):
+            phi[:, i] += phi[:, i - 1]
+        trig = np.cos(phi)
+        x = trig @ self.link_lengths
+        y = np.sin(phi, out=trig) @ self.link_lengths
+        return x, y
+
     @property
     def rigid_tip(self) -> F64:
         """Where the rigid kinematics of the joint angles puts the tip, m, (K, 2)."""
-        phi = self.q[:, : self.n_links].copy()  # absolute angles: a cumulative sum by column
-        for i in range(1, self.n_links):
-            phi[:, i] += phi[:, i - 1]
-        return np.stack([np.cos(phi) @ self.link_lengths, np.sin(phi) @ self.link_lengths], axis=1)
+        return np.stack(self._rigid_tip(slice(None)), axis=1)
 
     @property
     def elastic_deflection(self) -> F64:
         """Distance between the true tip and the rigid-kinematics tip, m, (K,)."""
-        return _row_norms(self.tip - self.rigid_tip)
+        return self._elastic_deflection(slice(None))
+
+    def _elastic_deflection(self, rows: slice) -> F64:
+        """:attr:`elastic_deflection` of ``rows`` (each row's number as in the whole)."""
+        x, y = self._rigid_tip(rows)
+        tip = self.tip[rows]
+        d = np.empty((x.shape[0], 2))
+        np.subtract(tip[:, 0], x, out=d[:, 0])
+        np.subtract(tip[:, 1], y, out=d[:, 1])
+        return _row_norms(d)
 
     # ------------------------------------------------------------------ metrics
     def metrics(
@@ -166,17 +182,19 @@ class SimulationResult:
         settle_tolerance : float
             Error band for the settling time, m.
         """
-        err = self.error
-        end = _float(self.info.get("motion_end_s"), float(self.t[-1]))
+        t, err, tau = self.t, self.error, self.tau
+        end = _float(self.info.get("motion_end_s"), float(t[-1]))
         corners = self.corner_times
+        # the elastic deflection of the rows the residual vibration reads, only
+        deflection = self._elastic_deflection(slice(_m.residual_start(t, end), None))
         return {
             "rms_error_m": _m.rms_error(err),
             "max_error_m": _m.max_error(err),
-            "corner_errors_m": _m.corner_errors(self.t, err, corners, corner_window).tolist(),
-            "residual_vibration_m": _m.residual_vibration(self.t, self.elastic_deflection, end),
-            "settling_time_s": _m.settling_time(self.t, err, end, settle_tolerance),
-            "control_effort_N2m2s": _m.control_effort(self.t, self.tau),
-            "max_torque_Nm": float(np.nanmax(np.abs(self.tau))) if self.tau.size else 0.0,
+            "corner_errors_m": _m.corner_errors(t, err, corners, corner_window).tolist(),
+            "residual_vibration_m": _m.residual_vibration(t, deflection, end),
+            "settling_time_s": _m.settling_time(t, err, end, settle_tolerance),
+            "control_effort_N2m2s": _m.control_effort(t, tau),
+            "max_torque_Nm": _max_abs(tau),
             "sim_time_s": float(self.t[-1]),
             "wall_time_s": _float(self.info.get("wall_time_s"), float("nan")),
         }
@@ -391,8 +409,18 @@ def envelope(t: F64, y: F64, max_points: int) -> tuple[F64, F64]:
 def _row_norms(d: F64) -> F64:
     """``|d_k|`` of each row (as ``numpy.linalg.norm(d, axis=1)``, without its
     temporaries)."""
-    norms: F64 = np.sqrt(np.einsum("ij,ij->i", d, d))
-    return norms
+    norms: F64 = np.einsum("ij,ij->i", d, d)
+    return np.sqrt(norms, out=norms)
+
+
+def _max_abs(x: F64) -> float:
+    """``nanmax(|x|)`` (0 for no samples), without a temporary when every sample is
+    finite: ``max(max(x), -min(x))``, the same number."""
+    if not x.size:
+        return 0.0
+    if np.isfinite(x).all():
+        return float(max(x.max(), -x.min()))
+    return float(np.nanmax(np.abs(x)))
 
 
 def _float(value: JSONValue, default: float) -> float:
