@@ -157,6 +157,7 @@ def _format_summary(summary: dict[str, Any]) -> str:
         f"{s['trajectory']['kind']} trajectory",
         f"  simulated {summary['sim_time_s']:g} s at dt = {sim['dt']:g} s "
         f"({sim['substeps']} substep(s)) in {summary['wall_time_s']:.3g} s",
+        f"  reference: {_reference_text(summary['run'])}",
     ]
 
     def num(x: Any, unit: str) -> str:
@@ -195,6 +196,14 @@ def _json_text(summary: dict[str, Any], result: SimulationResult | None) -> str:
     ]
     series = ',\n  "series": {\n' + ",\n".join(columns) + "\n  }\n}"
     return text[: text.rindex("}")].rstrip() + series
+
+
+def _reference_text(run: dict[str, Any]) -> str:
+    """The reference the run used, and who chose it."""
+    sigma = run.get("smoothing_s")
+    who = "the controller's choice" if run.get("reference_chosen_by") == "controller" else "set"
+    shape = "the raw path" if not sigma else f"the path smoothed by a {sigma:.3g} s Gaussian"
+    return f"{shape} ({who})"
 
 
 def _check_animate(path: str | None) -> Path | None:
@@ -396,8 +405,11 @@ def add_parser(sub: Any) -> None:
         "--smoothing",
         type=float,
         metavar="SECONDS",
-        help="zero-phase smoothing of the reference path (default 0: none; 0.1 cuts the "
-        "square's corners symmetrically)",
+        help="standard deviation of a zero-phase Gaussian smoothing of the reference path "
+        "(default: what the controller asks for: none for pd, jt-pd, joint-pd and fuzzy, the "
+        "paper's laws; lqg and reflected choose it from their closed loop, 0.056 s and 0.23 s "
+        "on the paper's arm with the tip; 0: the raw path, its corners taken at constant "
+        "speed; the summary's run.smoothing_s and run.reference_chosen_by say which was used)",
     )
     sim.add_argument(
         "--feedforward",

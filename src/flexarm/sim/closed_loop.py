@@ -162,7 +162,8 @@ def simulate(
         "record_signals": s.record_signals,
         "method": s.method,
         "feedforward": setup.feedforward,
-        "smoothing_s": s.smoothing,
+        "smoothing_s": setup.smoothing,
+        "reference_chosen_by": "user" if s.smoothing is not None else "controller",
         "duration_s": setup.loop.n_steps * s.dt,
         "n_links": arm.n_links,
         "n_modes": list(arm.n_modes),
@@ -204,6 +205,7 @@ class _Setup(NamedTuple):
     whole: tuple[F64, F64] | None  # the whole reference (short runs, the SciPy loop)
     kept: NDArray[np.int64]  # the recorded instants
     feedforward: bool
+    smoothing: float  # s, the smoothing of the path used (the settings' or the law's)
     method: str
     n_rows: int
 
@@ -234,6 +236,9 @@ def _set_up(
     )
 
     # ------------------------------------------------------------ reference
+    smoothing = s.smoothing
+    if smoothing is None:  # what the law asks for
+        smoothing = _law_smoothing(arm, controller, trajectory, s)
     link, distance, _ = s.sensor.resolve(arm)
     short_of_tip = link >= 0 and not (link == N - 1 and distance == arm.link_lengths[-1])
     pipeline = ReferencePipeline(
@@ -246,7 +251,7 @@ def _set_up(
         point=(link, distance) if short_of_tip else None,
         elbow=s.elbow,
         feedforward=_rigid_dynamics(arm) if use_ff else None,
-        smoothing=s.smoothing,
+        smoothing=smoothing,
         owner=_OWNER,
     )
     whole: tuple[F64, F64] | None = None
@@ -331,6 +336,7 @@ def _set_up(
         whole=whole,
         kept=kept,
         feedforward=use_ff,
+        smoothing=smoothing,
         method=s.method,
         n_rows=n_rows,
     )
@@ -393,6 +399,31 @@ def recorded_instants(k0: int, k1: int, n_steps: int, every: int) -> NDArray[np.
     if k0 <= n_steps < k1 and n_steps % every:
         kept = np.append(kept, np.int64(n_steps))
     return kept
+
+
+_PATH_POINTS = 17
+"""Evenly spaced instants (and the corners) at which a law is shown the path to choose
+its reference (``Controller.reference_smoothing``)."""
+
+
+def _law_smoothing(
+    arm: Plant, controller: Controller, trajectory: Trajectory, s: SimulationSettings
+) -> float:
+    """The smoothing ``controller`` asks for (s), shown the path's end-effector points at
+    :data:`_PATH_POINTS` evenly spaced instants and at the corners; checked."""
+    if type(controller).reference_smoothing is Controller.reference_smoothing:
+        return 0.0  # (the interface's own answer, without evaluating the path)
+    duration = float(trajectory.duration)
+    corners = [float(c) for c in trajectory.corner_times if 0.0 <= float(c) <= duration]
+    times = np.union1d(np.linspace(0.0, duration, _PATH_POINTS), corners)
+    path = np.asarray(trajectory.evaluate(times)[0], dtype=float).reshape(-1, 2)
+    value = controller.reference_smoothing(arm, s.sensor, s.dt, path, s.elbow)
+    if not isinstance(value, int | float) or not (np.isfinite(value) and value >= 0):
+        raise InvalidValueError(
+            f"The 'reference_smoothing' of {type(controller).__name__} must be a finite "
+            f"number of seconds >= 0. Got {value!r} instead."
+        )
+    return float(value)
 
 
 def _designs_on_reference(controller: Controller) -> bool:
