@@ -78,6 +78,24 @@ def test_each_metric_is_its_plain_expression_bit_for_bit(seed):
     assert same(m.control_effort(t, tau), effort_plain(t, tau))
 
 
+@pytest.mark.parametrize("n_links", [1, 2, 3])
+@pytest.mark.parametrize("rows", [1, 5, m.BLOCK, 2 * m.BLOCK + 7])
+def test_the_per_row_series_by_blocks_are_the_whole_arrays_bit_for_bit(n_links, rows):
+    rng = np.random.default_rng(rows + n_links)
+    angles = rng.uniform(-4.0, 4.0, (rows, n_links))
+    lengths = rng.uniform(0.5, 5.0, n_links)
+    tip, desired = rng.normal(size=(rows, 2)), rng.normal(size=(rows, 2))
+    phi = np.cumsum(angles, axis=1)  # (the same sums, left to right)
+    rigid = np.stack([np.cos(phi) @ lengths, np.sin(phi) @ lengths], axis=1)
+    e = tip - rigid
+    assert same(m.elastic_deflection(angles, lengths, tip), np.sqrt(np.einsum("ij,ij->i", e, e)))
+    d = tip - desired
+    assert same(m.row_distances(tip, desired), np.sqrt(np.einsum("ij,ij->i", d, d)))
+    t = np.cumsum(rng.uniform(1e-3, 0.1, rows))
+    tau = rng.normal(size=(rows, n_links))
+    assert same(m.control_effort(t, tau), effort_plain(t, tau))
+
+
 def result_metrics_plain(res):
     """SimulationResult.metrics() as the plain expressions over every row."""
     d = res.tip - res.desired

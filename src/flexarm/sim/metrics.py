@@ -3,8 +3,11 @@
 All errors are end-effector position errors in metres against the desired
 (unshaped, undelayed) path; times in seconds, increasing (the control instants).
 Each metric is computed with as few passes and temporaries over the series as it
-needs (a long run has millions of rows), the same arithmetic in the same order as
-the plain NumPy expressions in the docstrings.
+needs (a long run has millions of rows, and fresh memory is slow to come by), the
+same arithmetic in the same order as the plain NumPy expressions in the
+docstrings; the series of one number per row (:func:`row_distances`,
+:func:`elastic_deflection`) are computed :data:`BLOCK` rows at a time in small
+buffers, each row's number the same as over the whole.
 """
 
 from __future__ import annotations
@@ -15,16 +18,59 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "BLOCK",
     "control_effort",
     "corner_errors",
+    "elastic_deflection",
     "max_error",
     "residual_start",
     "residual_vibration",
     "rms_error",
+    "row_distances",
     "settling_time",
 ]
 
 F64 = NDArray[np.float64]
+
+BLOCK = 1 << 15
+"""Rows per block of the per-row series (their buffers stay in the cache)."""
+
+
+def row_distances(a: F64, b: F64) -> F64:
+    """``|a_k - b_k|`` of each row of two (K, 2) arrays, m: ``sqrt(einsum("ij,ij->i",
+    d, d))`` of ``d = a - b``, shape (K,)."""
+    n = a.shape[0]
+    out = np.empty(n)
+    d = np.empty((min(n, BLOCK), a.shape[1]))
+    for k0 in range(0, n, BLOCK):
+        k1 = min(k0 + BLOCK, n)
+        part = np.subtract(a[k0:k1], b[k0:k1], out=d[: k1 - k0])
+        np.einsum("ij,ij->i", part, part, out=out[k0:k1])
+    return np.sqrt(out, out=out)
+
+
+def elastic_deflection(angles: F64, lengths: F64, tip: F64) -> F64:
+    """The distance (m) between the end effector ``tip`` (K, 2) and where the rigid
+    kinematics of the joint ``angles`` (K, N; rad) with links of ``lengths`` (N,; m)
+    puts it, shape (K,): with ``phi`` the absolute angles (a cumulative sum by
+    column), ``|tip - (cos(phi) @ lengths, sin(phi) @ lengths)|`` row by row."""
+    n, n_links = angles.shape
+    out = np.empty(n)
+    rows = min(n, BLOCK)
+    phi, trig = np.empty((rows, n_links)), np.empty((rows, n_links))
+    x, y, d = np.empty(rows), np.empty(rows), np.empty((rows, 2))
+    for k0 in range(0, n, BLOCK):
+        m = min(k0 + BLOCK, n) - k0
+        p = phi[:m]
+        np.copyto(p, angles[k0 : k0 + m])
+        for i in range(1, n_links):
+            p[:, i] += p[:, i - 1]
+        np.matmul(np.cos(p, out=trig[:m]), lengths, out=x[:m])
+        np.matmul(np.sin(p, out=trig[:m]), lengths, out=y[:m])
+        np.subtract(tip[k0 : k0 + m, 0], x[:m], out=d[:m, 0])
+        np.subtract(tip[k0 : k0 + m, 1], y[:m], out=d[:m, 1])
+        np.einsum("ij,ij->i", d[:m], d[:m], out=out[k0 : k0 + m])
+    return np.sqrt(out, out=out)
 
 
 def _finite(x: F64) -> F64:
@@ -120,9 +166,16 @@ def control_effort(t: F64, tau: F64) -> float:
         tau, t = tau[ok], t[ok]
     if tau.shape[0] < 2:
         return float("nan")
-    # np.trapezoid(y, t), y = sum_i tau_i**2, in place: sum(diff(t) * (y[1:] + y[:-1]) / 2)
-    y = np.einsum("ij,ij->i", tau, tau)
-    pairs = np.add(y[1:], y[:-1])
-    pairs *= np.subtract(t[1:], t[:-1], out=y[:-1])  # (y's rows are read: reused)
-    pairs /= 2.0
+    # np.trapezoid(y, t), y = sum_i tau_i**2, by blocks of intervals:
+    # sum(diff(t) * (y[1:] + y[:-1]) / 2)
+    n = tau.shape[0] - 1  # intervals
+    pairs = np.empty(n)
+    y, dt = np.empty(min(n, BLOCK) + 1), np.empty(min(n, BLOCK))
+    for k0 in range(0, n, BLOCK):
+        k1 = min(k0 + BLOCK, n)
+        rows = tau[k0 : k1 + 1]
+        power = np.einsum("ij,ij->i", rows, rows, out=y[: k1 - k0 + 1])
+        part = np.add(power[1:], power[:-1], out=pairs[k0:k1])
+        part *= np.subtract(t[k0 + 1 : k1 + 1], t[k0:k1], out=dt[: k1 - k0])
+        part /= 2.0
     return float(np.add.reduce(pairs))

@@ -129,7 +129,7 @@ class SimulationResult:
     @property
     def error(self) -> F64:
         """End-effector position error ``|tip - desired|``, m, shape (K,)."""
-        return _row_norms(self.tip - self.desired)
+        return _m.row_distances(self.tip, self.desired)
 
     @property
     def link_deflections(self) -> F64:
@@ -140,20 +140,13 @@ class SimulationResult:
             out[:, i] = self.q[:, s] @ self.tip_deflection_gains[s]
         return out
 
-    def _rigid_tip(self, rows: slice) -> tuple[F64, F64]:
-        """:attr:`rigid_tip`'s x and y of ``rows`` (each row's numbers as in the whole)."""
-        phi = self.q[rows, : self.n_links].copy()  # absolute angles: a cumulative sum by column
-        for i in range(1, self.n_links):
-            phi[:, i] += phi[:, i - 1]
-        trig = np.cos(phi)
-        x = trig @ self.link_lengths
-        y = np.sin(phi, out=trig) @ self.link_lengths
-        return x, y
-
     @property
     def rigid_tip(self) -> F64:
         """Where the rigid kinematics of the joint angles puts the tip, m, (K, 2)."""
-        return np.stack(self._rigid_tip(slice(None)), axis=1)
+        phi = self.q[:, : self.n_links].copy()  # absolute angles: a cumulative sum by column
+        for i in range(1, self.n_links):
+            phi[:, i] += phi[:, i - 1]
+        return np.stack([np.cos(phi) @ self.link_lengths, np.sin(phi) @ self.link_lengths], axis=1)
 
     @property
     def elastic_deflection(self) -> F64:
@@ -162,12 +155,8 @@ class SimulationResult:
 
     def _elastic_deflection(self, rows: slice) -> F64:
         """:attr:`elastic_deflection` of ``rows`` (each row's number as in the whole)."""
-        x, y = self._rigid_tip(rows)
-        tip = self.tip[rows]
-        d = np.empty((x.shape[0], 2))
-        np.subtract(tip[:, 0], x, out=d[:, 0])
-        np.subtract(tip[:, 1], y, out=d[:, 1])
-        return _row_norms(d)
+        angles = self.q[rows, : self.n_links]
+        return _m.elastic_deflection(angles, self.link_lengths, self.tip[rows])
 
     # ------------------------------------------------------------------ metrics
     def metrics(
@@ -404,13 +393,6 @@ def envelope(t: F64, y: F64, max_points: int) -> tuple[F64, F64]:
         keep += sorted({a + int(np.nanargmin(seg)), a + int(np.nanargmax(seg))})
     rows = np.array(keep, dtype=np.int64)
     return t[rows], y[rows]
-
-
-def _row_norms(d: F64) -> F64:
-    """``|d_k|`` of each row (as ``numpy.linalg.norm(d, axis=1)``, without its
-    temporaries)."""
-    norms: F64 = np.einsum("ij,ij->i", d, d)
-    return np.sqrt(norms, out=norms)
 
 
 def _max_abs(x: F64) -> float:
