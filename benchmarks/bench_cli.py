@@ -16,10 +16,11 @@ What is measured:
     the compiled kernels) is the same for both, so the difference of the two wall
     times is what the command spends on the extra simulated time: the real-time
     factor ``(long - short) / (wall(long) - wall(short))``, best against best and
-    median against median. Beside it: the compiled loop's own time (the summary's
-    ``run.wall_time_s``) for the same difference, and the child processes' user and
-    system CPU time (the system time is the kernel's: the pages of the recorded
-    series).
+    median against median; and each long run against the short run just before
+    it (the same moment's load), best and median of those differences. Beside it:
+    the compiled loop's own time (the summary's ``run.wall_time_s``) for the same
+    difference, and the child processes' user and system CPU time (the system time
+    is the kernel's: the pages of the recorded series).
 ``python``
     ``flexarm.simulate(FlexibleArm.paper(), duration=D)`` and ``result.metrics()``
     in this process for the same two durations (warm), for comparison.
@@ -105,6 +106,12 @@ def _difference(short: list[dict[str, float]], long: list[dict[str, float]], ext
         out[key]["real_time_factor"] = {
             "best": extra / d["best"] if d["best"] > 0 else float("inf"),
             "median": extra / d["median"] if d["median"] > 0 else float("inf"),
+        }
+        # each long run against the short run just before it (the same moment's load)
+        paired = [b[key] - a[key] for a, b in zip(short, long, strict=True)]
+        out[key]["paired_real_time_factor"] = {
+            "best": extra / min(paired) if min(paired) > 0 else float("inf"),
+            "median": extra / statistics.median(paired),
         }
     out["stdout_bytes"] = {"short": short[0]["stdout_bytes"], "long": long[0]["stdout_bytes"]}
     return out
@@ -235,6 +242,11 @@ def main(argv: list[str] | None = None) -> int:
                 f"{q['long']['best']:.3f} / {q['long']['median']:.3f} s: {extra:g} s more in "
                 f"{q['difference']['best']:.3f} / {q['difference']['median']:.3f} s, real time "
                 f"x{q['real_time_factor']['best']:.0f} / x{q['real_time_factor']['median']:.0f}"
+            )
+            pq = q["paired_real_time_factor"]
+            print(
+                f"  {'':<9}each long run against the short run before it: real time "
+                f"x{pq['best']:.0f} / x{pq['median']:.0f}"
             )
         for key, label in (("user_s", "user CPU"), ("sys_s", "sys CPU")):
             d = c[key]["difference"]
