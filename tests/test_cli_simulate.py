@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import flexarm as fa
+from flexarm._io import json_ready
 from flexarm.model.joints import MakkarFriction
 from flexarm.sensing.delays import SEED_WAVE_SPEED, bending_group_speed, travel_delay
 from flexarm.sim import simulate
@@ -61,6 +62,45 @@ def test_json_summary_has_the_metrics_and_the_settings(capsys, paper):
     assert data["run"]["controller"] == "pd" and data["run"]["status"] == "ok"
 
 
+METRICS = (
+    "rms_error_m",
+    "max_error_m",
+    "corner_errors_m",
+    "residual_vibration_m",
+    "settling_time_s",
+    "control_effort_N2m2s",
+    "max_torque_Nm",
+    "sim_time_s",
+)
+
+
+def test_json_prints_the_summary_not_the_series(capsys, paper):
+    """The summary's shape; its metrics bit for bit those of the Python call (JSON
+    round-trips a float exactly; undefined metrics are null); the measurement and
+    the reference, which nothing printed reads, are not recorded."""
+    data = run_json(capsys, "simulate", "--duration", "24")
+    top = {"status", *METRICS, "wall_time_s", "settings", "run", "out", "files", "animation"}
+    assert set(data) == top  # no "series"
+    assert data["run"]["record_signals"] is False
+    want = json.loads(json.dumps(json_ready(simulate(paper, duration=24.0).metrics())))
+    for key in METRICS:
+        assert data[key] == want[key], key
+    assert None not in data["corner_errors_m"]  # (all four corners inside the run)
+
+
+def test_json_series_prints_every_recorded_column(capsys, paper):
+    data = run_json(capsys, "simulate", "--duration", "0.05", "--series")
+    assert data["run"]["record_signals"] is True
+    header, table = simulate(paper, duration=0.05).table()
+    assert list(data["series"]) == header and "x_ref" in header
+    for name, column in zip(header, table.T, strict=True):
+        assert data["series"][name] == column.tolist(), name
+    for key in METRICS:  # the summary is the same
+        assert key in data
+    status, out, err = run(capsys, "simulate", "--duration", "0.05", "--series")
+    assert status == 2 and out == "" and "--series" in err and "--json" in err
+
+
 def test_text_summary(capsys):
     status, out, err = run(capsys, "simulate", "--duration", "0.2")
     assert status == 0 and err == ""
@@ -78,6 +118,8 @@ def test_out_writes_exactly_the_promised_files(capsys, tmp_path):
     assert summary["out"] == str(out_dir) and set(summary["files"]) == FILES
 
     res = SimulationResult.load(out_dir / "result.npz")
+    assert summary["run"]["record_signals"] is True  # the files hold the whole run
+    assert res.measurement.shape[1] > 0 and res.reference.shape[1] > 0
     metrics = res.metrics()
     for key in ("rms_error_m", "max_error_m", "sim_time_s", "control_effort_N2m2s"):
         assert metrics[key] == pytest.approx(summary[key], rel=1e-12)

@@ -67,8 +67,10 @@ __all__ = [
     "Controller",
     "JacobianTransposePD",
     "JointPD",
+    "gaussian_smoothing",
     "jacobian_transpose_law",
     "operational_lengths",
+    "ringing_frequency",
     "wrap_control_function",
 ]
 
@@ -198,6 +200,41 @@ class Controller:
     """Whether :func:`flexarm.simulate` adds the reference's rigid feedforward torques to
     this law's output by default (its ``feedforward=None``)."""
 
+    def reference_smoothing(
+        self,
+        arm: Plant,
+        sensor: Sensor | None,
+        dt: float,
+        path: NDArray[np.float64],
+        elbow: str = "positive",
+    ) -> float:
+        """The reference this law asks for: the standard deviation (s) of the zero-phase
+        Gaussian smoothing of the path that :func:`flexarm.simulate` applies when its
+        ``smoothing`` is None (the default); 0 is the raw path.
+
+        Parameters
+        ----------
+        arm : Plant
+            The simulated arm.
+        sensor : Sensor, optional
+            What the law reads.
+        dt : float
+            The control period, s.
+        path : ndarray, shape (P, 2)
+            End-effector points along the path, m, where the law may evaluate its loop.
+        elbow : {"positive", "negative"}
+            The path's inverse-kinematics branch.
+
+        Returns
+        -------
+        float
+            Seconds, >= 0. The default: 0.0, the raw path (the paper's laws were run on
+            it); :class:`flexarm.control.lqg.LQG` and
+            :class:`flexarm.control.reflected.ReflectedTipPD` choose it from their
+            closed loops.
+        """
+        return 0.0
+
     @property
     def cfunc(self) -> CFunc:  # pragma: no cover - interface
         """The compiled law, a ``numba.cfunc`` with :data:`CONTROL_SIGNATURE`."""
@@ -269,6 +306,40 @@ class Controller:
             tau.size,
         )
         return tau
+
+
+def ringing_frequency(poles: ArrayLike, damping: float = 0.5) -> float:
+    """The natural frequency (rad/s) of the slowest pole that rings: the smallest
+    ``|s|`` among continuous-time ``poles`` (rad/s) off the real axis with a damping
+    ratio ``-Re(s) / |s|`` below ``damping`` (0.5: more than 16 % overshoot). NaN if
+    none does. (The example's pair at 5 rad/s has a damping ratio of 0.6, the one
+    at 20 rad/s 0.05.)
+
+    Examples
+    --------
+    >>> round(ringing_frequency([-1.0, -3.0 + 4.0j, -3.0 - 4.0j, -1.0 + 20.0j]), 4)
+    20.025
+    """
+    s = np.asarray(poles, dtype=complex).ravel()
+    s = s[(s.imag != 0.0) & (np.abs(s) > 0.0)]
+    s = s[-s.real / np.abs(s) < damping]
+    return float(np.min(np.abs(s))) if s.size else float("nan")
+
+
+def gaussian_smoothing(frequency: float, attenuation: float) -> float:
+    """The standard deviation (s) of the zero-phase Gaussian smoothing whose frequency
+    response ``exp(-(omega sigma)**2 / 2)`` is ``1 / attenuation`` at ``frequency``
+    (rad/s): ``sigma = sqrt(2 ln attenuation) / frequency``; 0 for a NaN or infinite
+    frequency (nothing to attenuate).
+
+    Examples
+    --------
+    >>> round(gaussian_smoothing(10.0, 100.0), 6)  # 40 dB at 10 rad/s
+    0.303485
+    """
+    if not np.isfinite(frequency) or frequency <= 0.0:
+        return 0.0
+    return float(np.sqrt(2.0 * np.log(attenuation)) / frequency)
 
 
 def _ptr(a: NDArray[np.float64]) -> object:

@@ -159,9 +159,11 @@ def simulate(
         "dt_s": s.dt,
         "substeps": s.substeps,
         "record_every": every,
+        "record_signals": s.record_signals,
         "method": s.method,
         "feedforward": setup.feedforward,
-        "smoothing_s": s.smoothing,
+        "smoothing_s": setup.smoothing,
+        "reference_chosen_by": "user" if s.smoothing is not None else "controller",
         "duration_s": setup.loop.n_steps * s.dt,
         "n_links": arm.n_links,
         "n_modes": list(arm.n_modes),
@@ -174,14 +176,15 @@ def simulate(
     # the last row written: the instant the run reached, or the last one recorded before
     last_row = (k_end + every - 1) // every if status == 0 else k_end // every
     out = setup.loop.out
+    rows = setup.kept.shape[0]
     return assemble_result(
         arm,
         t=np.multiply(setup.kept, s.dt, dtype=np.float64),
         q=out.q,
         dq=out.dq,
         tau=out.tau,
-        measurement=out.y,
-        reference=out.r,
+        measurement=out.y if s.record_signals else np.empty((rows, 0)),
+        reference=out.r if s.record_signals else np.empty((rows, 0)),
         desired=out.desired,
         tip=out.tip if out.tip.shape[0] else None,
         diverged=status != 0,
@@ -202,6 +205,7 @@ class _Setup(NamedTuple):
     whole: tuple[F64, F64] | None  # the whole reference (short runs, the SciPy loop)
     kept: NDArray[np.int64]  # the recorded instants
     feedforward: bool
+    smoothing: float  # s, the smoothing of the path used (the settings' or the law's)
     method: str
     n_rows: int
 
@@ -228,9 +232,13 @@ def _set_up(
         duration=duration,
         substeps=s.substeps,
         record_every=s.record_every,
+        record_signals=s.record_signals,
     )
 
     # ------------------------------------------------------------ reference
+    smoothing = s.smoothing
+    if smoothing is None:  # what the law asks for
+        smoothing = _law_smoothing(arm, controller, trajectory, s)
     link, distance, _ = s.sensor.resolve(arm)
     short_of_tip = link >= 0 and not (link == N - 1 and distance == arm.link_lengths[-1])
     pipeline = ReferencePipeline(
@@ -243,7 +251,7 @@ def _set_up(
         point=(link, distance) if short_of_tip else None,
         elbow=s.elbow,
         feedforward=_rigid_dynamics(arm) if use_ff else None,
-        smoothing=s.smoothing,
+        smoothing=smoothing,
         owner=_OWNER,
     )
     whole: tuple[F64, F64] | None = None
@@ -301,6 +309,7 @@ def _set_up(
         tip_phi=basis(N - 1, float(arm.link_lengths[-1])) if record_tip and basis else None,
         reference=recorded_reference,  # type: ignore[arg-type]
         recorded=kept.shape[0],
+        record_signals=s.record_signals,
     )
     if s.check_sampling and isinstance(arm, FlexibleArm):
         from ..control.sampling import check_sampling as check
@@ -327,6 +336,7 @@ def _set_up(
         whole=whole,
         kept=kept,
         feedforward=use_ff,
+        smoothing=smoothing,
         method=s.method,
         n_rows=n_rows,
     )
@@ -354,7 +364,9 @@ def _execute(
             reference, desired = pipeline.rows(k0, k1)
             ks = recorded_instants(k0, k1, n_steps, every)
             rows = (ks + every - 1) // every
-            loop.out.r[rows], loop.out.desired[rows] = reference[ks - k0], desired[ks - k0]
+            loop.out.desired[rows] = desired[ks - k0]
+            if loop.out.r.shape[0]:  # (no rows: the reference is not recorded)
+                loop.out.r[rows] = reference[ks - k0]
         noise = no_noise
         if setup.channels.noisy:  # drawn block by block, in order: the same stream at once
             noise = generator.normal(size=(k1 - k0, n_ch))
@@ -387,6 +399,31 @@ def recorded_instants(k0: int, k1: int, n_steps: int, every: int) -> NDArray[np.
     if k0 <= n_steps < k1 and n_steps % every:
         kept = np.append(kept, np.int64(n_steps))
     return kept
+
+
+_PATH_POINTS = 17
+"""Evenly spaced instants (and the corners) at which a law is shown the path to choose
+its reference (``Controller.reference_smoothing``)."""
+
+
+def _law_smoothing(
+    arm: Plant, controller: Controller, trajectory: Trajectory, s: SimulationSettings
+) -> float:
+    """The smoothing ``controller`` asks for (s), shown the path's end-effector points at
+    :data:`_PATH_POINTS` evenly spaced instants and at the corners; checked."""
+    if type(controller).reference_smoothing is Controller.reference_smoothing:
+        return 0.0  # (the interface's own answer, without evaluating the path)
+    duration = float(trajectory.duration)
+    corners = [float(c) for c in trajectory.corner_times if 0.0 <= float(c) <= duration]
+    times = np.union1d(np.linspace(0.0, duration, _PATH_POINTS), corners)
+    path = np.asarray(trajectory.evaluate(times)[0], dtype=float).reshape(-1, 2)
+    value = controller.reference_smoothing(arm, s.sensor, s.dt, path, s.elbow)
+    if not isinstance(value, int | float) or not (np.isfinite(value) and value >= 0):
+        raise InvalidValueError(
+            f"The 'reference_smoothing' of {type(controller).__name__} must be a finite "
+            f"number of seconds >= 0. Got {value!r} instead."
+        )
+    return float(value)
 
 
 def _designs_on_reference(controller: Controller) -> bool:
@@ -425,6 +462,7 @@ def check_budget(
     duration: float,
     substeps: int = 1,
     record_every: int = 1,
+    record_signals: bool = True,
     runs: int = 1,
     workers: int = 1,
     owner: str = _OWNER,
@@ -449,6 +487,9 @@ def check_budget(
         Control period and simulated time, s.
     substeps, record_every : int
         As for :func:`simulate`.
+    record_signals : bool
+        As for :func:`simulate`: whether the measurement and the reference are
+        recorded.
     runs, workers : int
         Runs of this size, and how many run at once.
     owner : str
@@ -469,7 +510,8 @@ def check_budget(
     n_y = measurement_size(N, sum(arm.n_modes))
     # per recorded row: t, q, dq, tau, measurement, reference, desired, tip, and the
     # assembly's temporaries (about as much again)
-    per_row = 8 * 2 * (1 + 2 * n + N + n_y + (6 + 4 * N) + 2 + 2)
+    signals = n_y + (6 + 4 * N) if record_signals else 0
+    per_row = 8 * 2 * (1 + 2 * n + N + signals + 2 + 2)
     link = sensor.resolve(arm)[0]
     n_ch = 2 * N if link < 0 else 4
     h = dt / substeps

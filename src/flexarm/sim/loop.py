@@ -83,9 +83,10 @@ class LoopOutputs(NamedTuple):
     """The recorded rows: instant ``k`` goes to row ``ceil(k / every)``.
 
     ``q, dq`` (rows, n_dof); ``tau`` (rows, N) N m; ``y`` (rows, n_y) the
-    measurement; ``r`` (rows, reference_size) and ``desired`` (rows, 2) m, written
-    by the loop only for a streamed reference (else (0, .) or filled beforehand);
-    ``tip`` (rows, 2) m, the end effector, or (0, 2) when not recorded here.
+    measurement, or (0, n_y) when not recorded; ``r`` (rows, reference_size) and
+    ``desired`` (rows, 2) m, written by the loop only for a streamed reference (else
+    filled beforehand), ``r`` (0, reference_size) when not recorded; ``tip`` (rows,
+    2) m, the end effector, or (0, 2) when not recorded here.
     """
 
     q: F64
@@ -158,6 +159,7 @@ def loop_inputs(
     tip_phi: F64 | None,
     reference: tuple[F64, F64] | None,
     recorded: int,
+    record_signals: bool = True,
 ) -> Loop:
     """The one way to build a :class:`Loop`: the state at ``q, dq`` (copied) with the
     controller's initial state and the delay line at steady state, and output rows
@@ -166,7 +168,9 @@ def loop_inputs(
     ``tip_phi`` (the last link's point basis at its tip) records the end effector
     in the loop; ``reference``, the reference rows and desired points already
     recorded ``(r, desired)``, is used as the outputs as it is (else the loop or the
-    caller writes them).
+    caller writes them). ``record_signals=False`` records neither the measurement
+    nor the reference (``y`` and ``r`` get no rows; ``reference``'s rows are not
+    kept); the desired points are recorded all the same.
     """
     n, n_links = q.shape[0], model.link.shape[0]
     n_y = measurement_size(n_links, int(model.mode_start[n_links]) - n_links)
@@ -189,15 +193,16 @@ def loop_inputs(
     _channels.prime(
         state.q, state.dq, model, sensor, state.buffer, state.pade_x, state.signals[:n_ch]
     )
+    signal_rows = recorded if record_signals else 0
     if reference is None:
-        r, desired = np.empty((recorded, reference_size(n_links))), np.empty((recorded, 2))
+        r, desired = np.empty((signal_rows, reference_size(n_links))), np.empty((recorded, 2))
     else:
-        r, desired = reference
+        r, desired = reference if record_signals else (reference[0][:0], reference[1])
     out = LoopOutputs(  # every row up to the last one reached is written
         q=np.empty((recorded, n)),
         dq=np.empty((recorded, n)),
         tau=np.empty((recorded, n_links)),
-        y=np.empty((recorded, n_y)),
+        y=np.empty((signal_rows, n_y)),
         r=r,
         desired=desired,
         tip=np.empty((recorded if tip_phi is not None else 0, 2)),
@@ -236,7 +241,8 @@ def _run(
     loop's stream on, the reference is computed here at each instant instead
     (``reference`` is not read) and recorded with the desired point in ``out.r``
     and ``out.desired`` (not written otherwise). With rows in ``out.tip``, the end
-    effector's position (deflected) is recorded there.
+    effector's position (deflected) is recorded there; with no rows in ``out.y``
+    (``out.r``) the measurement (the streamed reference) is not recorded.
 
     Returns ``(status, k)``: status 0 and ``k1`` when done, 1 and the last instant
     whose state was finite when the state diverged (non-finite, rates above 1e12,
@@ -269,6 +275,8 @@ def _run(
     o_ff = r_feedforward(n_links)
     streamed = loop.stream.spec[0] != 0.0
     record_tip = out.tip.shape[0] > 0
+    record_y = out.y.shape[0] > 0
+    record_r = out.r.shape[0] > 0
     last_link = n_links - 1
     tip_distance = model.link[last_link, LEN]
     for k in range(k0, k1):
@@ -309,15 +317,17 @@ def _run(
             for r in range(n):
                 out.q[row, r] = q[r]
                 out.dq[row, r] = dq[r]
-            for c in range(y.shape[0]):
-                out.y[row, c] = y[c]
+            if record_y:
+                for c in range(y.shape[0]):
+                    out.y[row, c] = y[c]
             if record_tip:
                 px, py, _, _ = point_state(q, q, model, last_link, tip_distance, loop.tip_phi)
                 out.tip[row, 0] = px
                 out.tip[row, 1] = py
             if streamed:
-                for c in range(state.reference.shape[0]):
-                    out.r[row, c] = state.reference[c]
+                if record_r:
+                    for c in range(state.reference.shape[0]):
+                        out.r[row, c] = state.reference[c]
                 out.desired[row, 0] = state.desired[0]
                 out.desired[row, 1] = state.desired[1]
         if k == n_steps:
@@ -437,11 +447,12 @@ def run(
         ("out.q", out.q, n),
         ("out.dq", out.dq, n),
         ("out.tau", out.tau, n_links),
-        ("out.y", out.y, n_y),
     ):
         _rows_at_least(arr, name, owner, rows, width, True)
+    _rows_at_least(out.y, "out.y", owner, rows if _has_rows(out.y) else 0, n_y, True)
     if streamed:
-        _rows_at_least(out.r, "out.r", owner, rows, reference_size(n_links), True)
+        r_rows = rows if _has_rows(out.r) else 0  # no rows: the reference is not recorded
+        _rows_at_least(out.r, "out.r", owner, r_rows, reference_size(n_links), True)
         _rows_at_least(out.desired, "out.desired", owner, rows, 2, True)
     tip_phi = loop.tip_phi
     check_vector(tip_phi, "tip_phi", owner, np.shape(tip_phi))
@@ -475,6 +486,11 @@ def _check_stream(stream: ReferenceStream, n_links: int, owner: str) -> bool:
             f"reference along at least 2 knots. Got {n_links} links and {k} knots instead."
         )
     return on
+
+
+def _has_rows(arr: F64) -> bool:
+    """Whether ``arr`` is a series the loop records (no rows: it does not)."""
+    return not (isinstance(arr, np.ndarray) and arr.ndim == 2 and arr.shape[0] == 0)
 
 
 def _rows_at_least(arr: F64, name: str, owner: str, rows: int, width: int, writable: bool) -> None:

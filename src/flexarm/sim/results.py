@@ -129,7 +129,7 @@ class SimulationResult:
     @property
     def error(self) -> F64:
         """End-effector position error ``|tip - desired|``, m, shape (K,)."""
-        return _row_norms(self.tip - self.desired)
+        return _m.row_distances(self.tip, self.desired)
 
     @property
     def link_deflections(self) -> F64:
@@ -151,7 +151,12 @@ class SimulationResult:
     @property
     def elastic_deflection(self) -> F64:
         """Distance between the true tip and the rigid-kinematics tip, m, (K,)."""
-        return _row_norms(self.tip - self.rigid_tip)
+        return self._elastic_deflection(slice(None))
+
+    def _elastic_deflection(self, rows: slice) -> F64:
+        """:attr:`elastic_deflection` of ``rows`` (each row's number as in the whole)."""
+        angles = self.q[rows, : self.n_links]
+        return _m.elastic_deflection(angles, self.link_lengths, self.tip[rows])
 
     # ------------------------------------------------------------------ metrics
     def metrics(
@@ -166,17 +171,19 @@ class SimulationResult:
         settle_tolerance : float
             Error band for the settling time, m.
         """
-        err = self.error
-        end = _float(self.info.get("motion_end_s"), float(self.t[-1]))
+        t, err, tau = self.t, self.error, self.tau
+        end = _float(self.info.get("motion_end_s"), float(t[-1]))
         corners = self.corner_times
+        # the elastic deflection of the rows the residual vibration reads, only
+        deflection = self._elastic_deflection(slice(_m.residual_start(t, end), None))
         return {
             "rms_error_m": _m.rms_error(err),
             "max_error_m": _m.max_error(err),
-            "corner_errors_m": _m.corner_errors(self.t, err, corners, corner_window).tolist(),
-            "residual_vibration_m": _m.residual_vibration(self.t, self.elastic_deflection, end),
-            "settling_time_s": _m.settling_time(self.t, err, end, settle_tolerance),
-            "control_effort_N2m2s": _m.control_effort(self.t, self.tau),
-            "max_torque_Nm": float(np.nanmax(np.abs(self.tau))) if self.tau.size else 0.0,
+            "corner_errors_m": _m.corner_errors(t, err, corners, corner_window).tolist(),
+            "residual_vibration_m": _m.residual_vibration(t, deflection, end),
+            "settling_time_s": _m.settling_time(t, err, end, settle_tolerance),
+            "control_effort_N2m2s": _m.control_effort(t, tau),
+            "max_torque_Nm": _max_abs(tau),
             "sim_time_s": float(self.t[-1]),
             "wall_time_s": _float(self.info.get("wall_time_s"), float("nan")),
         }
@@ -388,11 +395,14 @@ def envelope(t: F64, y: F64, max_points: int) -> tuple[F64, F64]:
     return t[rows], y[rows]
 
 
-def _row_norms(d: F64) -> F64:
-    """``|d_k|`` of each row (as ``numpy.linalg.norm(d, axis=1)``, without its
-    temporaries)."""
-    norms: F64 = np.sqrt(np.einsum("ij,ij->i", d, d))
-    return norms
+def _max_abs(x: F64) -> float:
+    """``nanmax(|x|)`` (0 for no samples), without a temporary when every sample is
+    finite: ``max(max(x), -min(x))``, the same number."""
+    if not x.size:
+        return 0.0
+    if np.isfinite(x).all():
+        return float(max(x.max(), -x.min()))
+    return float(np.nanmax(np.abs(x)))
 
 
 def _float(value: JSONValue, default: float) -> float:

@@ -92,7 +92,9 @@ builds, with the same names and SI units::
     # seed = 0                # sensor-noise seed (default: unseeded)
     elbow = "positive"        # inverse-kinematics branch of the reference
     # max_deflection = 4.5    # m (default: each link's length)
-    # smoothing = 0.1         # s: zero-phase smoothing of the reference path (preview)
+    # smoothing = 0.1         # s: zero-phase smoothing of the reference path (preview;
+    #                         # default: what the controller asks for; 0: the raw path)
+    # record_signals = true   # record the measurement and the reference (false: no columns)
     # feedforward = true      # rigid inverse dynamics (default: the controller's choice)
     # check_sampling = true   # refuse a period beyond the sampled loop's bound
     # record_every = 1        # record every k-th control instant (and the last)

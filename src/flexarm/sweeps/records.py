@@ -63,7 +63,9 @@ def run_scenario(scenario: Mapping[str, Value]) -> SimulationResult:
     from ..sim.scenario import Scenario
 
     sc = Scenario.from_dict(scenario, source=RUN_SOURCE)
-    return sc.simulate(progress=False)
+    # the record keeps the metrics only: the measurement and the reference are not recorded
+    # (the same run and metrics, a third of the memory)
+    return sc.simulate(progress=False, record_signals=False)
 
 
 def record_of(run_id: str, outcome: SimulationResult | BaseException) -> Record:
