@@ -3,7 +3,7 @@
 Oracles (none calls the code under test to produce the expected value):
 
 * the Padé coefficients of orders 1–3 written out by hand, and the paper's order-2
-  formula (spec §3);
+  formula (the paper's Sec. V);
 * the Taylor series of ``e^{-sT}`` against a power-series division done in mpmath at
   40 digits; the leading phase-error term ``(n!)**2 / ((2n)! (2n+1)!) (wT)**(2n+1)``;
 * the transfer function rebuilt from ``(A, B, C, D)`` by a linear solve, Gramians
@@ -11,7 +11,7 @@ Oracles (none calls the code under test to produce the expected value):
 * the analytic continuous step response ``D + C A^-1 (expm(A t) - I) B`` and
   scipy.signal.step for the discretisation;
 * the Euler–Bernoulli dispersion relation ``EI beta**4 = rho w**2`` (phase speed
-  ``w / beta``, group speed ``d w / d beta``) and the paper's link (spec §1).
+  ``w / beta``, group speed ``d w / d beta``) and the paper's link (its Sec. III).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from flexarm.sensing.delays import (
     wave_delay,
 )
 
-EI_ARM, RHO_ARM, L_ARM = 1676.0, 0.335, 4.5  # spec §1
+EI_ARM, RHO_ARM, L_ARM = 1676.0, 0.335, 4.5  # the paper's link (Sec. III)
 ORDERS = tuple(range(1, 9))
 
 

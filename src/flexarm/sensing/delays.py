@@ -1,7 +1,7 @@
 r"""Transport delays: Padé approximants, their realisation and discretisation, wave speeds.
 
 A torque applied at a joint reaches a distant sensor through a bending wave; the
-paper (spec §3) models the travel time as a transport delay ``e^{-sT}`` realised by
+paper (its Sec. V) models the travel time as a transport delay ``e^{-sT}`` realised by
 a second-order Padé approximant,
 
 .. math:: e^{-sT} \approx \frac{1 - sT/2 + s^2T^2/12}{1 + sT/2 + s^2T^2/12},
