@@ -41,6 +41,7 @@ __all__ = [
     "SweepError",
     "SweepInterrupted",
     "SweepTypeError",
+    "UnstableStepError",
 ]
 
 
@@ -55,6 +56,11 @@ class InvalidValueError(FlexarmError, ValueError):
 
 class InvalidTypeError(FlexarmError, TypeError):
     """A parameter or an input has a wrong type."""
+
+
+class UnstableStepError(InvalidValueError):
+    """An integration step beyond the stability bound of the dynamics it integrates
+    (the message names the steps that work)."""
 
 
 class Cancelled(FlexarmError):

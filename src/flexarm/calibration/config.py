@@ -7,7 +7,8 @@ the same mapping (:meth:`CalibrationConfig.from_dict`)::
     [calibration]
     data = "data"              # directory of relative record files (beside the file;
                                # flexarm calibrate --data overrides it)
-    substeps = 4               # RK4 steps per sample interval
+    substeps = "auto"          # RK4 steps per sample interval, or "auto": the fewest
+                               # the initial arm's dynamics are stable at (RK4's bound)
     segment = 0.0              # s: cut records into segments this long, each
                                # started from the measured state (0: whole records)
     initial_state = "rest"     # each segment starts at the encoders' angles at rest;
@@ -105,7 +106,7 @@ class Settings:
     """The ``[calibration]`` section (module docstring)."""
 
     data: str | None = None
-    substeps: int = 4
+    substeps: int | str = "auto"
     segment: float = 0.0
     initial_state: str = "rest"
     smoothing: float | None = None
@@ -225,7 +226,8 @@ def load_config(path: str | os.PathLike[str]) -> CalibrationConfig:
 def _settings(r: ConfigReader, t: Mapping[str, Any]) -> Settings:
     s: Settings = r.build(Settings, t, "calibration")
     checks = {
-        "substeps": s.substeps >= 1 if isinstance(s.substeps, int) else False,
+        "substeps": s.substeps == "auto"
+        or (isinstance(s.substeps, int) and not isinstance(s.substeps, bool) and s.substeps >= 1),
         "segment": isinstance(s.segment, int | float) and s.segment >= 0,
         "smoothing": s.smoothing is None
         or (isinstance(s.smoothing, int | float) and s.smoothing > 0),

@@ -15,6 +15,7 @@ deflection and rate as well (``"fit"``): a long record then does not drift.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -23,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._config import TomlValue, copy_value, set_key
-from ..errors import CalibrationError, ConfigFileError, FlexarmError
+from ..errors import CalibrationError, ConfigFileError, FlexarmError, UnstableStepError
 from ..model.arm import FlexibleArm
 from ..model.drives import Drive
 from ..sensing.instruments import Encoder, Instrument, delayed
@@ -31,6 +32,7 @@ from ..sim.open_loop import simulate_open_loop
 from ..sim.prescribed import JointMotion, motion_from_samples, simulate_prescribed
 from ..sim.results import SimulationError
 from ..sim.scenario import arm_from_tables
+from ..sim.step_check import MARGIN, stable_step
 from .config import OUTPUT_KINDS, CalibrationConfig
 from .records import Record
 
@@ -191,6 +193,7 @@ class Predictor:
         self.motions: list[_CachedMotion | None] = []
         self.encoders: list[dict[int, F64]] = []
         plant = check_plant(config)
+        self.substeps = self._substeps(plant)
         for k, rec in enumerate(self.records):
             n = rec.t.shape[0]
             per = n if s.segment <= 0 else max(2, round(s.segment / rec.dt))
@@ -210,6 +213,22 @@ class Predictor:
             else:
                 self.motions.append(None)
             self.encoders.append(self._measured_joints(rec, plant))
+
+    def _substeps(self, plant: Plant) -> int:
+        """The substeps every replay takes: the file's, or with ``"auto"`` the fewest
+        the initial arm is stable at over the shortest sample interval, with a margin of
+        half again for the parameters' moves (a replay whose step is then beyond a
+        moved arm's bound fails and counts as a failed prediction)."""
+        s = self.config.settings.substeps
+        if s != "auto":
+            return int(s)
+        dt = min(rec.dt for rec in self.records)
+        free = None
+        if any(rec.drive == "angle" for rec in self.records):
+            free = np.ones(plant.arm.n_dof, dtype=bool)
+            free[plant.arm.actuated_slice] = False
+        h = stable_step(plant.arm, None, free)
+        return 1 if h == np.inf else max(1, math.ceil(1.5 * dt / (MARGIN * h)))
 
     def _measured_joints(self, rec: Record, plant: Plant) -> dict[int, F64]:
         """Joint -> its encoder's readings in the record (undelayed encoders only)."""
@@ -274,7 +293,9 @@ class Predictor:
             try:
                 motion = self.motions[k]
                 if motion is not None:
-                    res = simulate_prescribed(arm, t, motion, initial_state=x0, substeps=s.substeps)
+                    res = simulate_prescribed(
+                        arm, t, motion, initial_state=x0, substeps=self.substeps
+                    )
                 else:
                     assert torque is not None
                     res = simulate_open_loop(
@@ -282,13 +303,15 @@ class Predictor:
                         t,
                         torque[i0 : i1 + 1],
                         initial_state=x0,
-                        substeps=s.substeps,
+                        substeps=self.substeps,
                         interpolation=s.interpolation,
                         progress=False,
                     )
                 rows = res.q
             except SimulationError as exc:
                 rows = exc.result.q
+            except UnstableStepError:  # parameters moved where the step is too long
+                rows = np.full((i1 + 1 - i0, arm.n_dof), np.nan)
             except FlexarmError as exc:
                 raise CalibrationError(self.config.source, f"records[{k}]", str(exc)) from None
             last = i1 + 1 if g == len(self.segments[k]) - 1 else i1

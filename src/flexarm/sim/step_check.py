@@ -18,7 +18,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InvalidValueError
+from ..errors import UnstableStepError
 from ..model.arm import FlexibleArm
 from ..model.plant import Plant
 
@@ -111,8 +111,9 @@ def check_substeps(
 
     Raises
     ------
-    InvalidValueError
-        For an integer whose step is beyond the bound, naming the substeps that work.
+    UnstableStepError
+        (an InvalidValueError) For an integer whose step is beyond the bound, naming
+        the substeps that work.
     """
     h_max = stable_step(arm, q, free)
     if substeps == "auto":
@@ -122,7 +123,7 @@ def check_substeps(
     assert isinstance(substeps, int)
     if dt / substeps > h_max:
         need = math.ceil(dt / (MARGIN * h_max))
-        raise InvalidValueError(
+        raise UnstableStepError(
             f"The 'substeps' parameter of {owner} must be at least {need} for this arm: a "
             f"step of {dt / substeps:.3g} s is beyond the RK4 stability bound of its "
             f"dynamics linearised at the start ({h_max:.3g} s; a stiff joint, a high mode or "
