@@ -34,7 +34,14 @@ from .config import CalibrationConfig, Parameter
 from .model import Plant, Predictor, build_plant
 from .records import Record, load_record
 
-__all__ = ["IDENTIFIABILITY_TOL", "Fit", "calibrate_records", "fit_percent", "load_records"]
+__all__ = [
+    "IDENTIFIABILITY_TOL",
+    "Fit",
+    "calibrate_records",
+    "fit_percent",
+    "initial_states",
+    "load_records",
+]
 
 F64 = NDArray[np.float64]
 
@@ -403,6 +410,36 @@ def calibrate_records(
         )
     finally:
         problem.close()
+
+
+def initial_states(predictor: Predictor, plant: Plant, k: int) -> F64 | None:
+    """The initial states of record ``k`` that best replay it on ``plant`` (the
+    parameters held), as MATLAB's ``compare`` estimates a validation record's initial
+    conditions; None where the file does not fit initial states
+    (``initial_state = "fit"``). The replay is nearly linear in them: two
+    Gauss-Newton steps from rest, each one forward-difference Jacobian."""
+    n = predictor.n_nuisance(plant, k)
+    if n == 0:
+        return None
+    rec = predictor.records[k]
+    weights = {name: 1.0 / (float(np.std(y)) or 1.0) for name, y in rec.outputs.items()}
+
+    def residual(nu: F64) -> F64:
+        predicted = predictor.predict(plant, k, nu)
+        parts = [(predicted[c] - y) * weights[c] for c, y in rec.outputs.items()]
+        r = np.concatenate(parts)
+        return np.where(np.isfinite(r), r, _FAILED)
+
+    nu = np.zeros(n)
+    step = 1e-4
+    for _ in range(2):
+        r0 = residual(nu)
+        jac = np.column_stack([(residual(nu + step * e) - r0) / step for e in np.eye(n)])
+        delta, *_ = np.linalg.lstsq(jac, -r0, rcond=None)
+        if not np.all(np.isfinite(delta)):
+            break
+        nu = nu + delta
+    return nu
 
 
 def _residual_correlation(problem: _Problem, residual: F64) -> dict[str, float]:

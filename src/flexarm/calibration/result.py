@@ -21,6 +21,7 @@ import math
 import os
 import time
 from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -33,7 +34,7 @@ from .._io import JSONValue, json_ready, output_directory
 from ..errors import CalibrationError
 from ..model.damped_modes import DampedModes, damped_modes
 from .config import CalibrationConfig, load_config
-from .fit import Fit, calibrate_records, fit_percent, load_records
+from .fit import Fit, calibrate_records, fit_percent, initial_states, load_records
 from .model import Plant, Predictor, build_plant
 from .records import load_record
 
@@ -91,12 +92,13 @@ def _record_fit(
 ) -> RecordFit:
     rec = predictor.records[k]
     nuisance = None
-    if fit is not None:
-        training = [i for i, r in enumerate(predictor.records) if r.role == "training"]
-        if k in training and fit.nuisance:
-            nuisance = fit.nuisance[training.index(k)]
+    training = [i for i, r in enumerate(predictor.records) if r.role == "training"]
+    if fit is not None and k in training and fit.nuisance:
+        nuisance = fit.nuisance[training.index(k)]
+    else:  # a record the fit did not see: its initial states estimated, parameters held
+        nuisance = initial_states(predictor, plant, k)
     after = predictor.predict(plant, k, nuisance)
-    before = predictor.predict(initial, k)
+    before = predictor.predict(initial, k, initial_states(predictor, initial, k))
     channels = {
         name: ChannelFit(
             fit_percent(y, after[name]),
@@ -396,7 +398,11 @@ def calibrate(
     plant = build_plant(config, fit.values)
     initial = build_plant(config, fit.initial)
     predictor = Predictor(config, records)
-    fits = [_record_fit(predictor, k, plant, initial, fit) for k in range(len(records))]
+    n_workers = workers or (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1)
+    with ThreadPoolExecutor(max(1, n_workers)) as pool:  # the replays release the GIL
+        fits = list(
+            pool.map(lambda k: _record_fit(predictor, k, plant, initial, fit), range(len(records)))
+        )
     return Calibration(
         config=config,
         fit=fit,
