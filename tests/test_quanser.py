@@ -1,0 +1,90 @@
+"""The Quanser 2 DOF Serial Flexible Link examples run as they are, on the rig's measured
+files (``../shared/data/quanser_2dsfl``, or ``$FLEXARM_QUANSER``), and reach what the
+example's README reports (regression bounds with a stated margin: a slip shows here)."""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+import pathlib
+import tomllib
+
+import pytest
+
+import flexarm as fa
+from flexarm.calibration.config import CalibrationConfig, load_config
+from helpers.cli import run
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+EXAMPLES = ROOT / "examples" / "quanser_2dsfl"
+DATA = pathlib.Path(
+    os.environ.get("FLEXARM_QUANSER", ROOT.parent / "shared" / "data" / "quanser_2dsfl")
+)
+
+pytestmark = pytest.mark.skipif(
+    not (DATA / "lqg_step_10deg_run01.mat").is_file(),
+    reason=f"the Quanser rig's files are not in {DATA} (set FLEXARM_QUANSER to their directory)",
+)
+
+MARGIN = 2.0  # percentage points below what the example's README reports
+
+
+@pytest.fixture(scope="module")
+def stage1():
+    return fa.calibrate(load_config(EXAMPLES / "stage1_steps.toml").with_data(DATA))
+
+
+def test_stage1_fits_its_training_runs(stage1):
+    """Reported: 76.7 % and 77.6 % (the issue's 80 % is not reached: see the README)."""
+    fits = [r.channels["th12"].fit_percent for r in stage1.records if r.role == "training"]
+    assert len(fits) == 2 and min(fits) >= 76.7 - MARGIN
+    for r in stage1.records:
+        c = r.channels["th12"]
+        assert c.fit_percent > c.fit_percent_initial + 20  # the calibration helped
+    p = stage1.parameters()
+    assert all(e["determined"] for e in p.values())
+    assert 0.08 <= p["delay th12"]["value"] <= 0.16  # the logger's lag, about 0.1 s
+
+
+def test_stage1_predicts_a_step_run_it_has_not_seen():
+    """Fitted on one LQ step run, the other predicted (its initial states estimated,
+    the parameters held): reported 76.8 % and 76.4 %, the issue's 75 % met."""
+    data = tomllib.loads((EXAMPLES / "stage1_steps.toml").read_text())
+    for held_out in (0, 1):
+        d = copy.deepcopy(data)
+        d["records"][held_out]["role"] = "validation"
+        d["records"] = d["records"][:2]
+        config = CalibrationConfig.from_dict(d, "loo", EXAMPLES).with_data(DATA)
+        cal = fa.calibrate(config)
+        unseen = next(r for r in cal.records if r.role == "validation")
+        assert unseen.channels["th12"].fit_percent >= 75.0
+
+
+def test_stage1_from_the_command_line(capsys, tmp_path):
+    status, out, err = run(
+        capsys,
+        "calibrate",
+        EXAMPLES / "stage1_steps.toml",
+        "--data",
+        DATA,
+        "--json",
+        "--out",
+        tmp_path / "out",
+    )
+    assert status == 0, err
+    summary = json.loads(out)
+    assert set(summary["parameters"]) == {"EI1", "J tip", "damping ratio", "delay th12"}
+    for entry in summary["parameters"].values():
+        assert {"value", "ci95"} <= set(entry)
+    assert [r["file"] for r in summary["training"]] == [
+        str(DATA / "lqg_step_10deg_run01.mat"),
+        str(DATA / "lqg_step_neg_10deg_run01.mat"),
+    ]
+    assert all(
+        "fit_percent" in c and "rms" in c
+        for r in summary["validation"]
+        for c in r["channels"].values()
+    )
+    written = {p.name for p in (tmp_path / "out").iterdir()}
+    assert {"summary.json", "calibrated.toml", "report.html", "record0.png"} <= written
