@@ -28,9 +28,8 @@ import time
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from _machine import machine_info  # noqa: E402
-
 import flexarm  # noqa: E402
+from _machine import machine_info  # noqa: E402
 from flexarm.calibration.config import load_config  # noqa: E402
 
 CONFIG = ROOT / "examples" / "quanser_2dsfl" / "stage1_steps.toml"
