@@ -11,6 +11,8 @@ import pytest
 
 import flexarm as fa
 from flexarm.calibration.config import CalibrationConfig
+from flexarm.calibration.fit import load_records
+from flexarm.calibration.model import Predictor, build_plant
 from flexarm.errors import CalibrationError
 from flexarm.model.drives import Drive
 from flexarm.sensing.instruments import Encoder, JointDeflection, StrainGauge, delayed
@@ -364,3 +366,27 @@ def test_a_record_that_cannot_be_read_is_one_error_naming_the_key(tmp_path, chan
     with pytest.raises(CalibrationError, match=match) as err:
         fa.calibrate(config)
     assert err.value.key == key
+
+
+def test_an_arm_the_fit_stiffens_beyond_the_initial_step_is_replayed_at_its_own(tmp_path):
+    """With substeps "auto" the initial arm's step (EI 300: 2 substeps at 250 Hz) is too
+    long for the truth's (EI 1000: its second mode 1.8 times faster, beyond the margin of
+    half again): the replays of a stiffer arm take the substeps it needs, so the fit
+    reaches the truth instead of stalling where the initial step fails."""
+    path = _beam_record(tmp_path / "stiff.npz", ei=1000.0, noise=0.0)
+    params = [
+        {
+            "name": "EI",
+            "key": "arm.links[0].flexural_rigidity",
+            "bounds": [50.0, 3000.0],
+            "initial": 300.0,
+        }
+    ]
+    config = _beam_config(tmp_path, [path], params, substeps="auto")
+    predictor = Predictor(config, load_records(config))
+    values = [1000.0 if p.name == "EI" else p.initial for p in config.parameters]
+    stiff = build_plant(config, np.array(values))
+    assert predictor.for_plant(stiff).substeps > predictor.substeps > 1  # the case as stated
+    cal = fa.calibrate(config)
+    assert cal.parameters()["EI"]["value"] == pytest.approx(1000.0, rel=0.01)
+    assert cal.records[0].channels["tip"].fit_percent > 95

@@ -432,13 +432,22 @@ def initial_states(predictor: Predictor, plant: Plant, k: int) -> F64 | None:
 
     nu = np.zeros(n)
     step = 1e-4
+    r0 = residual(nu)
     for _ in range(2):
-        r0 = residual(nu)
         jac = np.column_stack([(residual(nu + step * e) - r0) / step for e in np.eye(n)])
         delta, *_ = np.linalg.lstsq(jac, -r0, rcond=None)
         if not np.all(np.isfinite(delta)):
             break
-        nu = nu + delta
+        # A step is kept only where it lowers the cost (halved up to four times): a
+        # replay far from linear in its initial states must not be made worse.
+        for _ in range(5):
+            r1 = residual(nu + delta)
+            if float(r1 @ r1) < float(r0 @ r0):
+                nu, r0 = nu + delta, r1
+                break
+            delta = delta / 2.0
+        else:
+            break
     return nu
 
 

@@ -14,6 +14,7 @@ deflection and rate as well (``"fit"``): a long record then does not drift.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 from collections.abc import Mapping, Sequence
@@ -215,20 +216,36 @@ class Predictor:
             self.encoders.append(self._measured_joints(rec, plant))
 
     def _substeps(self, plant: Plant) -> int:
-        """The substeps every replay takes: the file's, or with ``"auto"`` the fewest
-        the initial arm is stable at over the shortest sample interval, with a margin of
-        half again for the parameters' moves (a replay whose step is then beyond a
-        moved arm's bound fails and counts as a failed prediction)."""
+        """The substeps every replay takes at least: the file's, or with ``"auto"`` the
+        fewest the initial arm is stable at over the shortest sample interval, with a
+        margin of half again for the parameters' moves (an arm they move beyond it is
+        replayed with the substeps it needs, :meth:`for_plant`)."""
         s = self.config.settings.substeps
         if s != "auto":
             return int(s)
+        return self._stable_substeps(plant, 1.5)
+
+    def _stable_substeps(self, plant: Plant, margin: float) -> int:
         dt = min(rec.dt for rec in self.records)
         free = None
         if any(rec.drive == "angle" for rec in self.records):
             free = np.ones(plant.arm.n_dof, dtype=bool)
             free[plant.arm.actuated_slice] = False
         h = stable_step(plant.arm, None, free)
-        return 1 if h == np.inf else max(1, math.ceil(1.5 * dt / (MARGIN * h)))
+        return 1 if h == np.inf else max(1, math.ceil(margin * dt / (MARGIN * h)))
+
+    def for_plant(self, plant: Plant) -> Predictor:
+        """This predictor with substeps the arm of ``plant`` is stable at (with
+        ``substeps = "auto"``, where the parameters moved the arm beyond the step the
+        initial arm took): a replay is never failed by the step alone."""
+        if self.config.settings.substeps != "auto":
+            return self
+        needed = self._stable_substeps(plant, 1.0)
+        if needed <= self.substeps:
+            return self
+        other = copy.copy(self)
+        other.substeps = needed
+        return other
 
     def _measured_joints(self, rec: Record, plant: Plant) -> dict[int, F64]:
         """Joint -> its encoder's readings in the record (undelayed encoders only)."""
@@ -283,6 +300,7 @@ class Predictor:
         """The states ``q`` (shape (K, n_dof)) of record ``k`` replayed on ``plant``
         (NaN from where a segment diverged)."""
         arm, rec, s = plant.arm, self.records[k], self.config.settings
+        substeps = self.for_plant(plant).substeps
         nu = np.zeros(self.n_nuisance(plant, k)) if nuisance is None else np.asarray(nuisance)
         per_segment = nu.size // max(1, len(self.segments[k]))
         q = np.full((rec.t.shape[0], arm.n_dof), np.nan)
@@ -293,9 +311,7 @@ class Predictor:
             try:
                 motion = self.motions[k]
                 if motion is not None:
-                    res = simulate_prescribed(
-                        arm, t, motion, initial_state=x0, substeps=self.substeps
-                    )
+                    res = simulate_prescribed(arm, t, motion, initial_state=x0, substeps=substeps)
                 else:
                     assert torque is not None
                     res = simulate_open_loop(
@@ -303,7 +319,7 @@ class Predictor:
                         t,
                         torque[i0 : i1 + 1],
                         initial_state=x0,
-                        substeps=self.substeps,
+                        substeps=substeps,
                         interpolation=s.interpolation,
                         progress=False,
                     )
