@@ -51,6 +51,9 @@ class Drive:
         The amplifier's limit, A (> 0; inf: none): a larger current is clipped.
     rotor_inertia : float
         ``J_r``, the rotor's inertia about its own axis, kg m**2 (>= 0).
+    current_offset : float
+        ``i_0``, A: what the current reading shows at zero current (a measured
+        current ``i`` drives ``i - i_0``); default 0.
     """
 
     torque_constant: float = 1.0
@@ -58,6 +61,7 @@ class Drive:
     efficiency: float = 1.0
     current_limit: float = math.inf
     rotor_inertia: float = 0.0
+    current_offset: float = 0.0
 
     def __post_init__(self) -> None:
         owner = "Drive"
@@ -96,6 +100,7 @@ class Drive:
             "rotor_inertia",
             check_real(self.rotor_inertia, "rotor_inertia", owner, nonnegative=True),
         )
+        set_(self, "current_offset", check_real(self.current_offset, "current_offset", owner))
 
     @property
     def torque_gain(self) -> float:
@@ -115,8 +120,9 @@ class Drive:
     def joint_torque(
         self, *, current: ArrayLike | None = None, motor_torque: ArrayLike | None = None
     ) -> F64:
-        """The torque at the joint (N m) for a motor ``current`` (A, clipped to the
-        limit) or a torque on the motor shaft ``motor_torque`` (N m); one of them."""
+        """The torque at the joint (N m) for a measured motor ``current`` (A: less the
+        reading's offset, clipped to the limit) or a torque on the motor shaft
+        ``motor_torque`` (N m); one of them."""
         if (current is None) == (motor_torque is None):  # neither or both
             raise InvalidValueError(
                 "Drive.joint_torque takes a 'current' or a 'motor_torque', one of them."
@@ -124,7 +130,8 @@ class Drive:
         if motor_torque is None:
             i = check_array(cast(ArrayLike, current), "current", "Drive.joint_torque")
             return np.asarray(
-                self.torque_gain * np.clip(i, -self.current_limit, self.current_limit)
+                self.torque_gain
+                * np.clip(i - self.current_offset, -self.current_limit, self.current_limit)
             )
         tm = check_array(motor_torque, "motor_torque", "Drive.joint_torque")
         return np.asarray(self.efficiency * self.gear_ratio * tm)
