@@ -4,8 +4,8 @@ Model
 -----
 Links are uniform Euler–Bernoulli beams moving in a plane: horizontal (no
 gravity, the default) or, with ``gravity=(g_x, g_y)``, any plane that holds the
-gravity vector (:mod:`flexarm.model.gravity`). Link ``i`` (0-based) has a clamped frame at its joint, at absolute
-angle
+gravity vector (:mod:`flexarm.model.gravity`). Link ``i`` (0-based) has a
+clamped frame at its joint, at absolute angle
 
 .. math:: \alpha_i = \sum_{k \le i} \theta_k + \sum_{k < i} w_k'(L_k),
 
@@ -98,6 +98,7 @@ from .kinematics import RigidKinematics, deflected_point
 from .lagrangian import body_terms, christoffel_matrix, mass_matrix_derivatives
 from .link import Link
 from .packing import outboard_loads, pack
+from .statics import Equilibrium, equilibrium
 from .validity import PAPER_DEFLECTION_ERROR, PAPER_MODEL_NOTE
 
 __all__ = [
@@ -478,6 +479,24 @@ class FlexibleArm(Backends, RigidKinematics):
         for i, jt in enumerate(self.joints or ()):
             potential += float(jt.potential(q[m0 + i] - q[i]))
         return float(kinetic), float(potential)
+
+    def equilibrium(self, q_joints: ArrayLike, *, require_stable: bool = True) -> Equilibrium:
+        """The arm at rest holding the joint angles ``q_joints`` (rad, shape
+        ``(n_links,)``) against gravity: the links' static sag, the holding torques
+        and the tangent stiffness there (:func:`flexarm.model.statics.equilibrium`).
+
+        Raises :class:`flexarm.model.statics.UnstableEquilibriumError` where the held
+        posture is unstable (a standing link beyond its buckling load) unless
+        ``require_stable=False``, which returns it flagged ``stable=False``.
+
+        Examples
+        --------
+        >>> arm = FlexibleArm([Link(1.0, 100.0, 1.0, n_modes=2)], gravity=(0.0, -9.81))
+        >>> eq = arm.equilibrium([0.0])
+        >>> round(float(eq.torques[0]), 4)   # holds rho L g L / 2
+        4.905
+        """
+        return equilibrium(self, q_joints, require_stable=require_stable)
 
     def natural_frequencies(
         self, q: ArrayLike | None = None, joints: str = "locked"

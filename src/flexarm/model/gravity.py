@@ -17,8 +17,8 @@ Written per link, in its frame at absolute angle ``alpha_i``
 ``V = -sum_i (R(alpha_i)' g) . b_i`` with the link's first moment about its
 joint plus the mass its tip carries,
 
-.. math:: b_i = \Big[\rho L^2/2 - \tfrac12 \delta' (\smallint \rho S) \delta,\ 
-          (\smallint \rho \phi) \cdot \delta\Big]
+.. math:: b_i = \Big[\rho L^2/2 - \tfrac12 \delta' (\smallint \rho S) \delta,
+          \ (\smallint \rho \phi) \cdot \delta\Big]
           + m^{out}_i \big[L - \tfrac12 \delta' S(L) \delta,\ \phi(L) \cdot \delta\big].
 
 The quadratic terms are the geometric stiffness of the axial load: with gravity
