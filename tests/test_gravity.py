@@ -53,6 +53,12 @@ ARMS = {
         2, gravity=TILTED, geometric_stiffening=False, boundary="clamped-free"
     ),
     "three-recursive": lambda: three_links(gravity=TILTED),
+    "two-stiff": lambda: fa.FlexibleArm(
+        [fa.Link(1.0, 60.0, 1.0, n_modes=2), fa.Link(0.8, 40.0, 0.8, n_modes=2, hub_mass=0.3)],
+        payload_mass=0.2,
+        payload_inertia=0.01,
+        gravity=TILTED,
+    ),
     "flexible-joints": lambda: fa.FlexibleArm.paper(
         gravity=TILTED, joints=[fa.LinearJoint(200.0, 0.05)] * 2, geometric_stiffening=True
     ),
@@ -460,3 +466,58 @@ def test_two_link_arm_released_from_rest_matches_exudyn():
     assert travel > 1.0
     assert tip[1] < tip[0] and np.all(bend[1] < bend[0]), (tip, bend)
     assert tip[1] < 0.01, tip
+
+
+# ------------------------------------------------------ linearised about the posture
+@pytest.mark.parametrize("kind", ["hanging", "standing"])
+def test_linearised_rigid_pendulum_has_its_closed_form_poles(kind):
+    """A rigid rod with a hub inertia J, free at its joint: poles ``+-i w`` hanging,
+    ``+-w`` standing, ``w**2 = m g L / 2 / (m L**2 / 3 + J)``."""
+    from flexarm.control.linearize import linearize
+
+    m, L, J = 1.5, 0.8, 0.05
+    link = fa.Link(L, 1.0, m / L, n_modes=0, hub_inertia=J)
+    arm = fa.FlexibleArm([link], gravity=TILTED)
+    # TILTED is not along y: the posture is hanging or standing along gravity itself
+    down = np.arctan2(TILTED[1], TILTED[0])
+    theta = down if kind == "hanging" else down + np.pi
+    poles = np.linalg.eigvals(linearize(arm, [theta]).A)
+    w2 = m * np.hypot(*TILTED) * L / 2 / (m * L**2 / 3 + J)
+    want = (
+        [1j * np.sqrt(w2), -1j * np.sqrt(w2)] if kind == "hanging" else [np.sqrt(w2), -np.sqrt(w2)]
+    )
+    np.testing.assert_allclose(np.sort_complex(poles), np.sort_complex(np.array(want)), atol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["two-stiff", "flexible-joints"])
+def test_linearisation_about_the_posture_is_the_jacobian_of_the_dynamics(name):
+    """A and B about the equilibrium against central differences of the nonlinear
+    forward dynamics at ``(q0, 0, tau0)``, where the arm is at rest under tau0."""
+    from flexarm.control.linearize import linearize
+
+    arm = ARMS[name]()
+    theta = np.array([0.6, -0.9])
+    eq = arm.equilibrium(theta)
+    n = arm.n_dof
+    zero = np.zeros(n)
+    assert np.abs(arm.forward_dynamics(eq.q, zero, eq.torques)).max() < 1e-8
+    sys = linearize(arm, theta)
+    h = 1e-6
+    cols = []
+    for k in range(2 * n):
+        e = np.zeros(2 * n)
+        e[k] = h
+        up = arm.forward_dynamics(eq.q + e[:n], e[n:], eq.torques)
+        down = arm.forward_dynamics(eq.q - e[:n], -e[n:], eq.torques)
+        cols.append((up - down) / (2 * h))
+    jac = np.array(cols).T
+    scale = np.abs(jac).max()
+    np.testing.assert_allclose(sys.A[n:], jac, rtol=1e-5, atol=1e-6 * scale)
+    bcols = []
+    for i in range(arm.n_links):
+        e = np.zeros(arm.n_links)
+        e[i] = h
+        up = arm.forward_dynamics(eq.q, zero, eq.torques + e)
+        down = arm.forward_dynamics(eq.q, zero, eq.torques - e)
+        bcols.append((up - down) / (2 * h))
+    np.testing.assert_allclose(sys.B[n:], np.array(bcols).T, rtol=1e-6, atol=1e-9)

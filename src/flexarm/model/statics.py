@@ -159,7 +159,8 @@ def equilibrium(
         if modal.any():
             raise InvalidValueError(
                 f"The 'q_joints' parameter of {_OWNER} has no static equilibrium that "
-                f"Newton's method finds in {max_iter} steps. Got {theta.tolist()} rad."
+                f"Newton's method finds in {max_iter} steps (links too flexible for their "
+                f"weight: a sag beyond the model's small deflections?). Got {theta.tolist()} rad."
             )
     torques = -arm.generalized_forces(q, zero_rate, zero_tau)[:n_links]
     k_t = np.diag(np.asarray(arm.arrays.stiffness, dtype=float))
