@@ -18,7 +18,9 @@ payload) and the definitions of the outputs:
   anything the comparisons resolve, to keep the mass matrix regular);
 * the payload is a rigid body clamped to the last tip;
 * the tip deflection of a link is its tip's offset from its root, across the
-  root's tangent (flexarm's link frame).
+  root's tangent (flexarm's link frame);
+* gravity (``gravity=(g_x, g_y)``, m/s**2) is Exudyn's mass-proportional load on
+  every cable element, hub and the payload.
 
 The axial stiffness ``EA`` is not part of flexarm's inextensible model; it is
 set from a slenderness ``L / r`` (radius of gyration ``r``, ``EA = EI / r**2``)
@@ -150,6 +152,7 @@ def run_exudyn(
     n_elements: int = 8,
     step: float = 1e-3,
     axial_stiffness: tuple[float, ...] | None = None,
+    gravity: tuple[float, float] | None = None,
 ) -> ExudynRun:
     """Simulate ``arm`` (straight, at rest, along x at ``t = 0``) in Exudyn.
 
@@ -158,7 +161,8 @@ def run_exudyn(
     angles are prescribed, as :func:`flexarm.sim.prescribed.simulate_prescribed`
     prescribes them; the arm starts straight at ``theta(0)``, at rest).
     ``n_elements`` ANCF elements per link; ``step`` the integrator's step (s);
-    outputs every ``dt_out`` s.
+    outputs every ``dt_out`` s; ``gravity`` (m/s**2, base frame) pulls on every
+    mass.
 
     A prescribed angle is a symbolic variable that a pre-step function sets, once
     per step, to the motion at the step's end time (where Exudyn's
@@ -179,6 +183,7 @@ def run_exudyn(
     x0 = np.zeros(2)
     prev_tip = None
     hubs, roots, tips = [], [], []
+    weighed: list[Any] = []  # bodies that gravity pulls on
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DeprecationWarning)
         for i, lk in enumerate(arm.links):
@@ -186,7 +191,7 @@ def run_exudyn(
             EA = EI * (SLENDERNESS / L) ** 2 if axial_stiffness is None else axial_stiffness[i]
             nodes = _cable_nodes(mbs, x0, phi0[i], L, n_elements)
             for k in range(n_elements):
-                mbs.AddObject(
+                cable = mbs.AddObject(
                     ei.ObjectANCFCable2D(
                         length=L / n_elements,
                         massPerLength=rho,
@@ -195,11 +200,13 @@ def run_exudyn(
                         nodeNumbers=[nodes[k], nodes[k + 1]],
                     )
                 )
+                weighed.append(cable)
             nh = mbs.AddNode(ei.NodeRigidBody2D(referenceCoordinates=[x0[0], x0[1], phi0[i]]))
             mass = lk.hub_mass if i > 0 and lk.hub_mass > 0 else 1e-9
             bh = mbs.AddObject(
                 ei.ObjectRigidBody2D(nodeNumber=nh, mass=mass, inertia=max(lk.hub_inertia, 1e-12))
             )
+            weighed.append(bh)
             m_hub = mbs.AddMarker(ei.MarkerBodyRigid(bodyNumber=bh))
             m_root = mbs.AddMarker(ei.MarkerNodeRigid(nodeNumber=nodes[0]))
             mbs.AddObject(
@@ -267,6 +274,12 @@ def run_exudyn(
                     constrainedAxes=[1, 1, 0, 0, 0, 1],
                 )
             )
+            weighed.append(bpl)
+        if gravity is not None:
+            load = [float(gravity[0]), float(gravity[1]), 0.0]
+            for body in weighed:
+                marker = mbs.AddMarker(ei.MarkerBodyMass(bodyNumber=body))
+                mbs.AddLoad(ei.LoadMassProportional(markerNumber=marker, loadVector=load))
         coords = exu.OutputVariableType.Coordinates
 
         def sensor(node: Any) -> Any:

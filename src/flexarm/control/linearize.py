@@ -1,7 +1,7 @@
 """Linear analysis of the arm: the open-loop plant, and closed loops through compiled laws.
 
 :func:`linearize` gives the open-loop arm about a rest configuration (links
-undeflected, motors at the link angles: an equilibrium under zero torque, as
+undeflected, motors at the link angles: an equilibrium under zero torque when
 there is no gravity) as a :class:`~flexarm.control.statespace.StateSpace`
 from the joint torques (N m) to a chosen output: what a sensor measures, the
 deflected tip, or the joint angles; positions, and velocities with
@@ -13,6 +13,17 @@ out, so the model is exact to first order::
 ``K`` the modal stiffness and the joint springs' tangent stiffness at zero
 deflection, ``D`` the modal and motor damping and the friction's slope at
 zero velocity (``MakkarFriction.slope``).
+
+With gravity (``FlexibleArm(gravity=...)``) the rest configuration is the
+posture that carries its weight, :meth:`FlexibleArm.equilibrium`: the links
+sagging, the joints held by the static torques ``tau0``, the motors of flexible
+joints ahead of their links by the springs' static deflection. ``K`` is then
+its tangent stiffness, ``K + d2V/dq2`` (gravity's softening of a standing link
+and stiffening of a hanging one, and the pendulum terms of the joints), and the
+model's states, inputs and outputs are deviations from ``(q0, 0)``, ``tau0``
+and ``y(q0)``: ``arm.equilibrium(theta)`` gives ``q0`` and ``tau0``. A posture
+beyond a link's buckling load has no such model and raises
+:class:`~flexarm.model.statics.UnstableEquilibriumError`.
 
 :func:`closed_loop_matrix` linearises ``x' = f(x)``, ``x = (q, dq)``, of an arm
 under a controller reading a sensor, in continuous time (the law applied
@@ -272,7 +283,13 @@ def linearize(
         States ``(q, dq)`` named after :attr:`FlexibleArm.coordinate_names`
         (rates prefixed ``d``), inputs ``tau1..tauN`` (N m), outputs in m or rad
         (and m/s, rad/s). Use ``.discretize(dt)`` for the sampled model and
-        ``.to_control()`` for python-control.
+        ``.to_control()`` for python-control. With gravity, deviations from
+        the posture :meth:`FlexibleArm.equilibrium` gives (module docstring).
+
+    Raises
+    ------
+    UnstableEquilibriumError
+        With gravity, if the posture puts a link beyond its buckling load.
     """
     owner = "linearize"
     if not isinstance(arm, FlexibleArm):
@@ -300,6 +317,10 @@ def linearize(
     else:
         angles = check_array(theta, "theta", owner, shape=(n_links,))
     q0 = rest_state(arm, angles)
+    stiffness = arm.stiffness_matrix
+    if arm.gravity is not None:  # the posture that carries its weight
+        posture = arm.equilibrium(angles)
+        q0, stiffness = posture.q, posture.stiffness
     mass = np.asarray(arm.mass_matrix(q0).real, dtype=float)
     if not np.all(np.isfinite(mass)) or np.linalg.cond(mass) > 1.0 / np.finfo(float).eps:
         raise InvalidValueError(
@@ -309,7 +330,7 @@ def linearize(
         )
     a = np.zeros((2 * n, 2 * n))
     a[:n, n:] = np.eye(n)
-    a[n:, :n] = -np.linalg.solve(mass, arm.stiffness_matrix)
+    a[n:, :n] = -np.linalg.solve(mass, stiffness)
     a[n:, n:] = -np.linalg.solve(mass, _damping(arm))
     b = np.zeros((2 * n, n_links))
     b[n:] = np.linalg.solve(mass, arm.input_matrix)

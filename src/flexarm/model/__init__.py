@@ -7,6 +7,9 @@
 * :mod:`~flexarm.model.kinematics`, :mod:`~flexarm.model.lagrangian` — its kinematics and
   Lagrangian as functions of arrays; :mod:`~flexarm.model.foreshortening` — the axial
   shortening of bent links (geometric stiffening) and its modal integrals;
+* :mod:`~flexarm.model.gravity`, :mod:`~flexarm.model.statics` — gravity in the plane of
+  motion (its potential and forces) and the arm at rest under it (sag, holding torques,
+  buckling);
 * :mod:`~flexarm.model.prescribed` — the arm with its joint motion prescribed;
 * :mod:`~flexarm.model.validity` — what the model choices leave out, measured;
 * :mod:`~flexarm.model.arrays`, :mod:`~flexarm.model.dynamics` — the arm packed as plain
@@ -31,12 +34,14 @@ _SUBMODULES = (
     "beam",
     "dynamics",
     "foreshortening",
+    "gravity",
     "joints",
     "kinematics",
     "lagrangian",
     "link",
     "plant",
     "prescribed",
+    "statics",
     "validity",
 )
 _NAMES = {

@@ -149,6 +149,8 @@ def unpack(buf: F64) -> ArmArrays:  # pragma: no cover - compiled
     shortening_cubic = view(buf, o, (n, k, k), np.float64)
     o += n * k * k
     shortening_quartic = view(buf, o, (n, k, k, k), np.float64)
+    o += n * k * k * k
+    gravity = view(buf, o, (2,), np.float64)
     return ArmArrays(
         mode_start=ms,
         link=link,
@@ -166,6 +168,7 @@ def unpack(buf: F64) -> ArmArrays:  # pragma: no cover - compiled
         shortening_moment=shortening[2],
         shortening_cubic=shortening_cubic,
         shortening_quartic=shortening_quartic,
+        gravity=gravity,
     )
 
 

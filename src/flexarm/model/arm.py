@@ -2,9 +2,10 @@ r"""The planar multi-link arm with flexible links: :class:`FlexibleArm`.
 
 Model
 -----
-Links are uniform Euler–Bernoulli beams moving in a horizontal plane (no
-gravity). Link ``i`` (0-based) has a clamped frame at its joint, at absolute
-angle
+Links are uniform Euler–Bernoulli beams moving in a plane: horizontal (no
+gravity, the default) or, with ``gravity=(g_x, g_y)``, any plane that holds the
+gravity vector (:mod:`flexarm.model.gravity`). Link ``i`` (0-based) has a
+clamped frame at its joint, at absolute angle
 
 .. math:: \alpha_i = \sum_{k \le i} \theta_k + \sum_{k < i} w_k'(L_k),
 
@@ -47,7 +48,9 @@ The rotor of joint ``i`` is carried by link ``i-1`` (the base for ``i = 0``):
 its kinetic energy is ``1/2 J_m (carrier angle rate + dq_mi)**2``, which gives
 the inertial coupling ``S`` of the paper (with ``rotor_coupling=False``
 only ``1/2 J_m dq_mi**2``, Spong's simplification). The rotor's mass belongs
-in the hub mass. Joint springs add their potential to ``V``.
+in the hub mass. Joint springs add their potential to ``V``, and gravity (``gravity``) the
+potential of every mass (:mod:`flexarm.model.gravity`):
+:meth:`FlexibleArm.equilibrium` gives the static sag and holding torques.
 
 Hubs and payload: ``Link.hub_inertia`` turns with its link; ``Link.hub_mass``
 is a point mass at the joint, carried by the previous link's tip. The payload
@@ -89,11 +92,13 @@ from .arrays import ArmArrays
 from .backends import Backends
 from .beam import NORMALIZATIONS, BeamModes
 from .foreshortening import shortening_matrix
+from .gravity import check_gravity, gravity_forces, gravity_potential
 from .joints import LinearJoint, NonlinearJoint
 from .kinematics import RigidKinematics, deflected_point
 from .lagrangian import body_terms, christoffel_matrix, mass_matrix_derivatives
 from .link import Link
 from .packing import outboard_loads, pack
+from .statics import Equilibrium, equilibrium
 from .validity import PAPER_DEFLECTION_ERROR, PAPER_MODEL_NOTE
 
 __all__ = [
@@ -144,6 +149,11 @@ class FlexibleArm(Backends, RigidKinematics):
         stiffening it brings; default True. False is the paper's linear
         kinematics, which diverge once a link turns faster than its first
         bending frequency.
+    gravity : (float, float), optional
+        The gravitational acceleration ``(g_x, g_y)`` in the base frame of the
+        plane of motion, m/s**2, e.g. ``(0, -9.81)`` for an arm in a vertical
+        plane with ``y`` up (:mod:`flexarm.model.gravity`). None (default): a
+        horizontal plane, no gravity terms at all.
 
     Examples
     --------
@@ -167,6 +177,7 @@ class FlexibleArm(Backends, RigidKinematics):
     joint_friction: str = "link"
     rotor_coupling: bool = True
     geometric_stiffening: bool = True
+    gravity: tuple[float, float] | None = None
     _derived: dict[str, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -189,6 +200,7 @@ class FlexibleArm(Backends, RigidKinematics):
                     f"Got {getattr(self, flag)!r} instead."
                 )
         check_option(self.mode_normalization, "mode_normalization", _OWNER, NORMALIZATIONS)
+        set_(self, "gravity", check_gravity(self.gravity, _OWNER))
         set_(
             self,
             "mode_amplitude",
@@ -429,9 +441,11 @@ class FlexibleArm(Backends, RigidKinematics):
         self, q: NDArray[Any], dq: NDArray[Any], tau: NDArray[Any]
     ) -> NDArray[Any]:
         """Generalised forces other than inertia, shape ``(n_dof,)``: ``B tau``, the
-        modal stiffness and damping, and the joints' spring, friction and motor
-        damping torques."""
+        modal stiffness and damping, the joints' spring, friction and motor
+        damping torques, and gravity (:func:`flexarm.model.gravity.gravity_forces`)."""
         out = -self.arrays.stiffness * q - self.arrays.damping * dq
+        if self.gravity is not None:
+            out = out + gravity_forces(self, q)
         if self.joints is None:
             out[: self.n_links] += tau
             return out  # type: ignore[no-any-return]
@@ -454,14 +468,35 @@ class FlexibleArm(Backends, RigidKinematics):
         return np.linalg.solve(self._mass_matrix_numpy(q), rhs)
 
     def energy(self, q: ArrayLike, dq: ArrayLike) -> tuple[float, float]:
-        """Kinetic and potential (elastic: links and joint springs) energy in J."""
+        """Kinetic and potential (elastic: links and joint springs; and gravity's,
+        zero at the base, with ``gravity``) energy in J."""
         q, dq = self._check_q(q), self._check_q(dq, "dq")
         kinetic = 0.5 * dq @ self.mass_matrix(q) @ dq
         potential = 0.5 * q @ (self.arrays.stiffness * q)
+        if self.gravity is not None:
+            potential += gravity_potential(self, q)
         m0 = self.motor_slice.start
         for i, jt in enumerate(self.joints or ()):
             potential += float(jt.potential(q[m0 + i] - q[i]))
         return float(kinetic), float(potential)
+
+    def equilibrium(self, q_joints: ArrayLike, *, require_stable: bool = True) -> Equilibrium:
+        """The arm at rest holding the joint angles ``q_joints`` (rad, shape
+        ``(n_links,)``) against gravity: the links' static sag, the holding torques
+        and the tangent stiffness there (:func:`flexarm.model.statics.equilibrium`).
+
+        Raises :class:`flexarm.model.statics.UnstableEquilibriumError` where the held
+        posture is unstable (a standing link beyond its buckling load) unless
+        ``require_stable=False``, which returns it flagged ``stable=False``.
+
+        Examples
+        --------
+        >>> arm = FlexibleArm([Link(1.0, 100.0, 1.0, n_modes=2)], gravity=(0.0, -9.81))
+        >>> eq = arm.equilibrium([0.0])
+        >>> round(float(eq.torques[0]), 4)   # holds rho L g L / 2
+        4.905
+        """
+        return equilibrium(self, q_joints, require_stable=require_stable)
 
     def natural_frequencies(
         self, q: ArrayLike | None = None, joints: str = "locked"

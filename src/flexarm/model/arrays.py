@@ -131,6 +131,10 @@ class ArmArrays(NamedTuple):
     shortening_quartic : float array, shape (n_dof, K, K, K)
         Row ``g``: ``int rho S_ga S_cd dx`` over link ``i``'s modes
         (``a0 + a``, ``a0 + c``, ``a0 + d``), indexed ``[g, a, c, d]``.
+    gravity : float array, shape (2,)
+        The gravitational acceleration ``(g_x, g_y)`` in the base frame, m/s**2
+        (:mod:`flexarm.model.gravity`). ``(0, 0)`` (an arm built with
+        ``gravity=None``) switches every gravity term off: the kernels skip them.
     joint : float array, shape (n_joints, 15)
         Flexible joints (``n_joints`` is 0 for rigid joints or ``n_links``), one
         row each: ``a1, a2, ksw, asw`` of the spring law (a linear joint is
@@ -156,6 +160,7 @@ class ArmArrays(NamedTuple):
     shortening_moment: F64
     shortening_cubic: F64
     shortening_quartic: F64
+    gravity: F64
 
 
 class Workspace(NamedTuple):
@@ -234,6 +239,7 @@ def field_shapes(
         "shortening_moment": (n, n),
         "shortening_cubic": (n, k, k),
         "shortening_quartic": (n, k, k, k),
+        "gravity": (2,),
     }
 
 
@@ -255,12 +261,13 @@ def pack_arm_arrays(
     shortening_moment: F64 | None = None,
     shortening_cubic: F64 | None = None,
     shortening_quartic: F64 | None = None,
+    gravity: F64 | None = None,
 ) -> ArmArrays:
     """The one way to build :class:`ArmArrays`: by keyword, shapes and dtypes checked,
     every array contiguous and read-only.
 
     The foreshortening arrays default to none (zero, ``K = 0``): the arm without
-    geometric stiffening.
+    geometric stiffening; ``gravity`` defaults to ``(0, 0)``: no gravity.
 
     Raises
     ------
@@ -291,6 +298,7 @@ def pack_arm_arrays(
         "shortening_moment": none2 if shortening_moment is None else shortening_moment,
         "shortening_cubic": none3 if shortening_cubic is None else shortening_cubic,
         "shortening_quartic": none4 if shortening_quartic is None else shortening_quartic,
+        "gravity": np.zeros(2) if gravity is None else gravity,
     }
     out: dict[str, F64] = {}
     for name, value in given.items():

@@ -51,6 +51,8 @@ class PackableArm(ArmParameters, Protocol):
     @property
     def geometric_stiffening(self) -> bool: ...
     @property
+    def gravity(self) -> tuple[float, float] | None: ...
+    @property
     def modes(self) -> tuple[BeamModes, ...]: ...
     @property
     def n_modes(self) -> tuple[int, ...]: ...
@@ -124,6 +126,7 @@ def pack(arm: PackableArm) -> ArmArrays:
         damping=d,
         payload=np.array([arm.payload_mass, arm.payload_inertia]),
         joint=joint,
+        gravity=None if arm.gravity is None else np.array(arm.gravity, dtype=float),
         **shortening,
     )
 

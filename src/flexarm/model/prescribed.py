@@ -11,7 +11,7 @@ free ``f`` coordinates,
           \tau = M_{aa} \ddot\theta + M_{af} \ddot q_f + h_a - Q_a,
 
 where ``Q`` are the generalised forces other than inertia and the joint
-torques (modal stiffness and damping, joint springs and friction) and ``h``
+torques (modal stiffness and damping, joint springs and friction, gravity) and ``h``
 the velocity terms; ``tau`` is the torque the servo must deliver. This is the
 constraint ``q_a = theta(t)`` imposed exactly (a Lagrange multiplier per joint,
 which is ``tau``), not a stiff servo approximating it.
@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 from .arrays import ArmArrays, Workspace
 from .dynamics import joint_forces, mass_and_bias
 from .dynamics._dense import ldlt_solve
+from .dynamics._gravity import gravity_forces
 
 __all__ = ["free_range", "prescribed_accelerations", "prescribed_dynamics"]
 
@@ -80,6 +81,7 @@ def prescribed_dynamics(
         for i in range(n_links):
             tau[i] = 0.0
         joint_forces(q, dq, tau, model, rhs)
+    gravity_forces(q, model, rhs)
     f0, f1 = free_range(model, n)
     a0 = f1 if f0 == 0 else 0  # first actuated coordinate
     nf = f1 - f0

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from .. import arrays as layout
 from ..arrays import HUB_MASS, INERTIA, LEN, MASS, STATIC, ArmArrays, Workspace
+from ._gravity import gravity_forces
 from ._link_terms import link_foreshortening, link_sums
 
 __all__ = [
@@ -325,7 +326,7 @@ def generalized_forces(
     q: F64, dq: F64, tau: F64, arrays: ArmArrays, rhs: F64
 ) -> None:  # pragma: no cover - compiled
     """The generalised forces other than inertia into ``rhs`` (order of ``q``):
-    ``B tau - K q - D dq`` and the flexible joints' forces."""
+    ``B tau - K q - D dq``, the flexible joints' forces and gravity (if any)."""
     for r in range(q.shape[0]):
         rhs[r] = -arrays.stiffness[r] * q[r] - arrays.damping[r] * dq[r]
     if arrays.joint.shape[0] > 0:
@@ -333,6 +334,7 @@ def generalized_forces(
     else:
         for r in range(tau.shape[0]):
             rhs[r] += tau[r]
+    gravity_forces(q, arrays, rhs)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..arrays import HUB_MASS, INERTIA, LEN, MASS, STATIC, ArmArrays
+from ._gravity import gravity_forces_two_links_one_mode, has_gravity
 
 __all__ = [
     "accelerations_two_links_one_mode",
@@ -66,7 +67,7 @@ def accelerations_two_links_one_mode(
     for that structure, in the same local order ``(theta1, delta1, theta2,
     delta2)``, and a 2 x 2 block solve in place of its ``L D L'`` solve: every
     intermediate stays in a register, there is no loop, and one division is on
-    the critical path. Hub mass, payload and any mode shape (the modal
+    the critical path. Hub mass, payload, gravity and any mode shape (the modal
     integrals) are covered; :func:`flexarm.model.dynamics.forward_dynamics` falls
     back to the general kernel for other structures.
 
@@ -177,6 +178,12 @@ def accelerations_two_links_one_mode(
     y1 = -k[2] * d1 - c[2] * dd1 - h1
     y2 = tau2 - k[1] * a2 - c[1] * da2 - h2
     y3 = -k[3] * d2 - c[3] * dd2 - h3
+    if has_gravity(arrays):
+        f0, f1, f2, f3 = gravity_forces_two_links_one_mode(a1, a2, d1, d2, arrays)
+        y0 += f0
+        y1 += f2
+        y2 += f1
+        y3 += f3
     # ---- Block elimination. C = M[(theta2, delta2)] depends on delta2 only, so its
     # inverse is not on the path from gamma to ddq; the Schur complement
     # S = A - B C^-1 B' of A = M[(theta1, delta1)] (B = M[(theta1, delta1),
