@@ -64,6 +64,15 @@ ARMS = {
     "4 links, joints, rotors uncoupled": lambda: chain(
         4, 1, joints=[fa.LinearJoint.default()] * 4, rotor_coupling=False
     ),
+    "3 links, joints of three gear ratios, coupled rotors": lambda: chain(
+        3,
+        [1, 2, 0],
+        joints=[
+            fa.LinearJoint(4e3, 0.2, gear_ratio=3.0),
+            fa.LinearJoint(2e3, 0.3, gear_ratio=50.0),
+            fa.NonlinearJoint(1e3, 1e5, 300.0, 1e4, 0.1),
+        ],
+    ),
     "12 links, 1 mode": lambda: chain(12, 1, geometric_stiffening=False),
 }
 
