@@ -326,6 +326,131 @@ def test_viscous_friction_on_one_side_gives_the_linear_solution(side):
         np.testing.assert_allclose(x, scipy.linalg.expm(A * t) @ x0, rtol=0, atol=1e-9)
 
 
+# ---------------------------------------------------------------- rigid joints
+@pytest.mark.parametrize("coupled", [True, False])
+def test_rigid_joints_add_their_geared_rotors_by_hand(coupled):
+    """Two rigid rods on RigidJoints: rotor 1 on the base adds J_m1 to theta_1;
+    rotor 2 on link 1 turns at theta_1' + N theta_2' (rotor side), so
+    T = 1/2 J_r2 (theta_1' + N theta_2')**2 adds J_r2, N J_r2, N**2 J_r2 = J_m2
+    (Spong's uncoupled rotor: J_m2 at theta_2 only). No motor coordinates."""
+    m1, l1, m2, l2, n2 = 1.3, 1.0, 0.56, 0.8, 6.0
+    jm1, jm2 = 0.2, 0.09
+    links = [fa.Link(l1, 1.0, m1 / l1, n_modes=0), fa.Link(l2, 1.0, m2 / l2, n_modes=0)]
+    joints = [fa.RigidJoint(jm1, damping=0.1, gear_ratio=3.0), fa.RigidJoint(jm2, gear_ratio=n2)]
+    arm = fa.FlexibleArm(links, joints=joints, rotor_coupling=coupled)
+    assert (arm.n_dof, arm.has_flexible_joints, arm.coordinate_names) == (
+        2,
+        False,
+        ["theta1", "theta2"],
+    )
+    q = np.array([0.3, -0.7])
+    expected = two_rigid_rods_mass_matrix(m1, l1, m2, l2, q[1])
+    expected[0, 0] += jm1
+    expected[1, 1] += jm2
+    if coupled:
+        jr2 = jm2 / n2**2
+        expected[0, 0] += jr2
+        expected[0, 1] += n2 * jr2
+        expected[1, 0] += n2 * jr2
+    for backend in ("compiled", "numpy"):
+        np.testing.assert_allclose(arm.mass_matrix(q, backend=backend), expected, rtol=1e-13)
+    rng = np.random.default_rng(4)
+    dq, tau = rng.normal(size=2), rng.normal(size=2)
+    ref = arm.forward_dynamics(q, dq, tau, backend="numpy")
+    for kernel in (dynamics.forward_dynamics_dense, dynamics.forward_dynamics_recursive):
+        out = np.empty(2)
+        kernel(q, dq, tau, arm.arrays, make_workspace(2), out)
+        np.testing.assert_allclose(out, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
+    assert not dynamics.is_two_links_one_mode(arm.arrays)
+
+
+def test_a_rigid_joint_with_viscous_friction_spins_down_exponentially():
+    """One rigid link (I about the joint) on a RigidJoint (rotor J_m, damping c,
+    Makkar friction g6 = b): theta' = w0 exp(-(c + b) t / (I + J_m))."""
+    c, b, jm = 0.3, 0.2, 0.15
+    joint = fa.RigidJoint(jm, damping=c, friction=MakkarFriction(0, 0, 0, 0, 0, b), gear_ratio=9)
+    arm = one_link_on_a_joint(joint)
+    inertia = 2.0 * 1.2**3 / 3 + 0.1
+    sol = simulate(arm, np.array([0.0, 2.0]), 3.0, n_eval=31)
+    rate = 2.0 * np.exp(-(c + b) * sol.t / (inertia + jm))
+    np.testing.assert_allclose(sol.y[1], rate, rtol=1e-9)
+    np.testing.assert_allclose(
+        sol.y[0], 2.0 * (inertia + jm) / (c + b) * (1 - rate / 2.0), rtol=1e-9
+    )
+    np.testing.assert_allclose(arm.damping_matrix, [[c]])
+
+
+def test_a_rigid_joint_is_the_limit_of_stiff_geared_joints():
+    """Three flexible links on geared, coupled joints with damping on the motor: as
+    the springs stiffen the motion tends to that on RigidJoints of the same rotors
+    and damping (the recursive kernel, three links, and the dense one agree)."""
+    links = [
+        fa.Link(1.0, 40.0, 1.0, n_modes=1),
+        fa.Link(0.8, 30.0, 1.0, n_modes=1),
+        fa.Link(0.5, 20.0, 1.0, n_modes=0),
+    ]
+    ratios, jms, damp = (3.0, 8.0, 2.0), (0.05, 0.03, 0.02), (0.1, 0.05, 0.02)
+
+    def torque(t):
+        return np.array([0.4, -0.15, 0.05]) * np.sin(np.pi * t) ** 2
+
+    rigid_joints = [
+        fa.RigidJoint(j, damping=c, gear_ratio=n) for j, c, n in zip(jms, damp, ratios, strict=True)
+    ]
+    kw = {"boundary": "clamped-free", "geometric_stiffening": False}
+    rigid = fa.FlexibleArm(links, joints=rigid_joints, **kw)
+    ref = simulate(rigid, np.zeros(2 * rigid.n_dof), 1.0, torque, n_eval=11).y[:3]
+    errors = []
+    for k in (1e3, 1e4, 1e5):
+        joints = [
+            LinearJoint(k, j, motor_damping=c, gear_ratio=n)
+            for j, c, n in zip(jms, damp, ratios, strict=True)
+        ]
+        arm = fa.FlexibleArm(links, joints=joints, **kw)
+        y = simulate(arm, np.zeros(2 * arm.n_dof), 1.0, torque, n_eval=11).y[:3]
+        errors.append(np.abs(y - ref).max())
+    assert errors[0] > errors[1] > errors[2]
+    assert errors[0] / errors[1] > 5 and errors[1] / errors[2] > 5
+    assert errors[2] < 1e-3 * np.abs(ref).max()
+
+
+def test_an_arm_mixing_rigid_and_flexible_joints_is_refused():
+    links = [fa.Link(1.0, 1.0, 1.0, n_modes=0)] * 2
+    with pytest.raises(
+        ValueError, match=r"'joints'.*all flexible joints.*or all RigidJoint.*\[1\]"
+    ):
+        fa.FlexibleArm(links, joints=[LinearJoint(10.0, 0.1), fa.RigidJoint(0.1)])
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"motor_inertia": -0.1}, ValueError, "'motor_inertia'"),
+        ({"damping": -1.0}, ValueError, "'damping'"),
+        ({"gear_ratio": 0.5}, ValueError, "'gear_ratio'"),
+        ({"friction": 1.0}, TypeError, "'friction'"),
+    ],
+)
+def test_rigid_joint_rejects_bad_parameters(kwargs, error, match):
+    with pytest.raises(error, match=match):
+        fa.RigidJoint(**kwargs)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"damping": -0.1}, ValueError, "'damping'"),
+        ({"friction_side": "gear"}, ValueError, "'friction_side'"),
+        ({"friction_side": 1}, TypeError, "'friction_side'"),
+    ],
+)
+def test_spring_damping_and_friction_side_are_checked(kwargs, error, match):
+    with pytest.raises(error, match=match):
+        LinearJoint(10.0, 0.1, **kwargs)
+    with pytest.raises(error, match=match):
+        NonlinearJoint(10.0, 0.0, 0.0, 1.0, 0.1, **kwargs)
+
+
 FLEX_ARMS = {
     "paper-nonlinear": lambda friction=None, **kw: fa.FlexibleArm.paper(
         joints=[NonlinearJoint(1.0e3, 4.0e6, 6.0e2, 1.6e5, 0.3, friction=friction)] * 2, **kw
