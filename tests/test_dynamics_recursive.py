@@ -64,6 +64,39 @@ ARMS = {
     "4 links, joints, rotors uncoupled": lambda: chain(
         4, 1, joints=[fa.LinearJoint.default()] * 4, rotor_coupling=False
     ),
+    "3 links, joints of three gear ratios, coupled rotors": lambda: chain(
+        3,
+        [1, 2, 0],
+        joints=[
+            fa.LinearJoint(4e3, 0.2, gear_ratio=3.0),
+            fa.LinearJoint(2e3, 0.3, gear_ratio=50.0),
+            fa.NonlinearJoint(1e3, 1e5, 300.0, 1e4, 0.1),
+        ],
+    ),
+    "4 links, rigid geared joints with friction, a rigid link, tip bodies": lambda: fa.FlexibleArm(
+        [
+            fa.Link(2.0, 1676.0, 0.335, n_modes=2, tip_mass=0.3, tip_inertia=0.02),
+            fa.RigidLink(1.5, 0.8, 0.6, 0.1, hub_mass=0.2, tip_inertia=0.05),
+            fa.Link(1.2, 800.0, 0.3, n_modes=1, tip_mass=0.1),
+            fa.Link(1.0, 600.0, 0.3, n_modes=2, tip_mass=0.2, tip_inertia=0.01),
+        ],
+        joints=[
+            fa.RigidJoint(0.3, 0.1, fa.MakkarFriction.default(), gear_ratio=100.0),
+            fa.RigidJoint(0.2, 0.05, gear_ratio=4.0),
+            fa.RigidJoint(0.0),
+            fa.RigidJoint(0.05, friction=fa.MakkarFriction.default()),
+        ],
+        payload_mass=0.4,
+    ),
+    "3 links, flexible joints, tip bodies, stiffening": lambda: fa.FlexibleArm(
+        [
+            fa.Link(3.0, 1676.0, 0.335, n_modes=1, tip_mass=0.5, tip_inertia=0.03),
+            fa.RigidLink(3.0, 1.0, 1.4, 0.7, tip_mass=0.2, tip_inertia=0.01),
+            fa.Link(3.0, 1676.0, 0.335, n_modes=2, hub_mass=0.1),
+        ],
+        joints=[JOINT] * 3,
+        payload_mass=0.2,
+    ),
     "12 links, 1 mode": lambda: chain(12, 1, geometric_stiffening=False),
 }
 

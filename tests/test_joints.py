@@ -15,6 +15,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import flexarm as fa
+from flexarm.model import dynamics
+from flexarm.model.arrays import make_workspace
 from flexarm.model.joints import LinearJoint, MakkarFriction, NonlinearJoint
 
 
@@ -148,6 +150,68 @@ def test_coupling_matrix_is_the_papers_S():
     np.testing.assert_allclose(spong.mass_matrix(q)[:2, :2], rigid.mass_matrix(q[:2]), atol=1e-14)
 
 
+def two_rigid_rods_mass_matrix(m1, l1, m2, l2, theta2):
+    """The textbook mass matrix of two uniform rods on revolute joints (centres of
+    mass at mid-length, I_c = m l**2 / 12), written out by hand."""
+    lc1, lc2 = l1 / 2, l2 / 2
+    i1, i2 = m1 * l1**2 / 12, m2 * l2**2 / 12
+    c2 = math.cos(theta2)
+    m11 = m1 * lc1**2 + i1 + m2 * (l1**2 + lc2**2 + 2 * l1 * lc2 * c2) + i2
+    m12 = m2 * (lc2**2 + l1 * lc2 * c2) + i2
+    m22 = m2 * lc2**2 + i2
+    return np.array([[m11, m12], [m12, m22]])
+
+
+@pytest.mark.parametrize("ratio", [1.0, 7.0, 100.0])
+def test_a_geared_rotor_adds_its_own_inertia_to_its_carrier(ratio):
+    """Rotor 2 (own inertia J_r, gear N, link-side J_m = N**2 J_r) rides on rigid link 1
+    at angle theta_1 and turns at theta_1' + N q_m2' (q_m2 link side):
+    T = 1/2 J_r (theta_1' + N q_m2')**2, so M gains J_r at (theta_1, theta_1),
+    N J_r at (theta_1, q_m2) and J_m at (q_m2, q_m2); rotor 1 sits on the base."""
+    m1, l1, m2, l2 = 1.3, 1.0, 0.56, 0.8
+    jr1, jr2 = 2e-3, 5e-4
+    links = [fa.Link(l1, 1.0, m1 / l1, n_modes=0), fa.Link(l2, 1.0, m2 / l2, n_modes=0)]
+    joints = [
+        LinearJoint(100.0, ratio**2 * jr1, gear_ratio=ratio),
+        NonlinearJoint(80.0, 0.0, 0.0, 1.0, ratio**2 * jr2, gear_ratio=ratio),
+    ]
+    arm = fa.FlexibleArm(links, joints=joints)
+    q = np.array([0.3, -0.7, 0.1, 0.2])
+    expected = np.zeros((4, 4))  # (theta1, theta2, qm1, qm2)
+    expected[:2, :2] = two_rigid_rods_mass_matrix(m1, l1, m2, l2, q[1])
+    expected[0, 0] += jr2
+    expected[0, 3] = expected[3, 0] = ratio * jr2
+    expected[2, 2] = ratio**2 * jr1
+    expected[3, 3] = ratio**2 * jr2
+    for backend in ("compiled", "numpy"):
+        np.testing.assert_allclose(
+            arm.mass_matrix(q, backend=backend), expected, rtol=1e-13, atol=1e-16
+        )
+    # the forward dynamics of every backend solve these equations
+    rng = np.random.default_rng(3)
+    dq, tau = rng.normal(size=4), rng.normal(size=2)
+    ref = arm.forward_dynamics(q, dq, tau, backend="numpy")
+    ws = make_workspace(4)
+    for kernel in (dynamics.forward_dynamics_dense, dynamics.forward_dynamics_recursive):
+        out = np.empty(4)
+        kernel(q, dq, tau, arm.arrays, ws, out)
+        np.testing.assert_allclose(out, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
+    np.testing.assert_allclose(
+        expected @ ref + arm.velocity_terms(q, dq), arm.generalized_forces(q, dq, tau), atol=1e-11
+    )
+
+
+def test_the_gear_ratio_is_checked_and_the_defaults_are_geared():
+    assert LinearJoint(1.0, 0.5).gear_ratio == 1.0  # a direct drive unless told
+    assert LinearJoint.default().gear_ratio == NonlinearJoint.default().gear_ratio == 100.0
+    assert NonlinearJoint.default().rotor_inertia == pytest.approx(3e-5, rel=1e-15)
+    for bad in (0.5, 0.0, -2.0, float("nan")):
+        with pytest.raises(ValueError, match="'gear_ratio'"):
+            LinearJoint(1.0, 0.5, gear_ratio=bad)
+    with pytest.raises(TypeError, match="'gear_ratio'"):
+        NonlinearJoint(10.0, 0.0, 0.0, 1.0, 0.5, gear_ratio="100")
+
+
 def test_rotor_on_a_flexible_link_turns_with_the_tip_slope():
     """The second rotor's carrier is link 1's deflected tip: its coupling row
     is the gradient of theta_1 + w_1'(L)."""
@@ -164,6 +228,227 @@ def test_rotor_on_a_flexible_link_turns_with_the_tip_slope():
     row[arm.modal_slice(0)] = arm.modes[0].tip_slope
     m2 = arm.motor_slice.start + 1
     np.testing.assert_allclose(M[:m2, m2], jm2 * row[:m2], atol=1e-14)
+
+
+@pytest.mark.parametrize(
+    "joint",
+    [
+        LinearJoint(40.0, 0.25, damping=0.6),
+        NonlinearJoint(40.0, 0.0, 0.0, 1.0, 0.25, damping=0.6),
+    ],
+    ids=["linear", "nonlinear"],
+)
+def test_a_damped_joint_decays_as_the_closed_form_oscillator(joint):
+    """One rigid link (inertia I) on a spring k with a damper c across it, motor J_m,
+    released at rest with deflection D0: the momentum I q' + J_m q_m' stays zero, so
+    D = q_m - q obeys D'' + (c / mu) D' + (k / mu) D = 0 with 1/mu = 1/I + 1/J_m:
+    D(t) = D0 exp(-zeta w0 t) (cos wd t + zeta w0 / wd sin wd t),
+    w0 = sqrt(k / mu), zeta = c / (2 sqrt(k mu)), wd = w0 sqrt(1 - zeta**2)."""
+    k, jm, c = 40.0, 0.25, 0.6
+    arm = one_link_on_a_joint(joint)
+    inertia = 2.0 * 1.2**3 / 3 + 0.1
+    mu = 1.0 / (1.0 / inertia + 1.0 / jm)
+    w0, zeta = math.sqrt(k / mu), c / (2.0 * math.sqrt(k * mu))
+    wd = w0 * math.sqrt(1.0 - zeta**2)
+    d0 = 0.1
+    sol = simulate(arm, np.array([0.0, d0, 0.0, 0.0]), 6 * 2 * np.pi / wd, n_eval=401)
+    t = sol.t
+    expected = d0 * np.exp(-zeta * w0 * t) * (np.cos(wd * t) + zeta * w0 / wd * np.sin(wd * t))
+    np.testing.assert_allclose(sol.y[1] - sol.y[0], expected, rtol=0, atol=1e-9 * d0)
+    # the ratio of successive peaks, exp(-2 pi zeta / sqrt(1 - zeta**2)), is far from 1
+    assert math.exp(-2 * math.pi * zeta / math.sqrt(1 - zeta**2)) < 0.6
+    np.testing.assert_allclose(arm.damping_matrix, [[c, -c], [-c, c]], rtol=1e-15)
+
+
+def test_friction_acts_on_the_side_each_joint_chooses():
+    """Joint 1 puts its friction on the motor, joint 2 takes the arm's link side: the
+    friction torque -f(v) appears on q_m1 and theta_2, with f Makkar's law by hand."""
+    g = (0.3, 50.0, 5.0, 0.7, 40.0, 0.2)
+    friction = MakkarFriction(*g)
+
+    def f(v):
+        return (
+            g[0] * (math.tanh(g[1] * v) - math.tanh(g[2] * v))
+            + g[3] * math.tanh(g[4] * v)
+            + g[5] * v
+        )
+
+    links = [fa.Link(1.0, 5.0, 1.0, n_modes=1), fa.Link(0.8, 3.0, 1.0, n_modes=1)]
+
+    def arm(fr, side):
+        joints = [
+            LinearJoint(100.0, 0.3, friction=fr, friction_side=side, gear_ratio=4.0),
+            NonlinearJoint(80.0, 1e3, 30.0, 50.0, 0.2, friction=fr),
+        ]
+        return fa.FlexibleArm(links, joints=joints, joint_friction="link")
+
+    mixed, smooth = arm(friction, "motor"), arm(None, "motor")
+    assert mixed.friction_sides == ("motor", "link")
+    assert mixed.friction_coordinates == (4, 1)
+    rng = np.random.default_rng(8)
+    q, dq = random_state(mixed, rng)
+    tau = rng.normal(size=2)
+    diff = mixed.generalized_forces(q, dq, tau) - smooth.generalized_forces(q, dq, tau)
+    expected = np.zeros(mixed.n_dof)
+    expected[4], expected[1] = -f(dq[4]), -f(dq[1])
+    np.testing.assert_allclose(diff, expected, rtol=1e-13, atol=1e-15)
+    # the kernels read each joint's side
+    ref = mixed.forward_dynamics(q, dq, tau, backend="numpy")
+    got = mixed.forward_dynamics(q, dq, tau, backend="compiled")
+    np.testing.assert_allclose(got, ref, rtol=1e-11, atol=1e-11 * np.abs(ref).max())
+    # the global choice stays the default
+    both_motor = fa.FlexibleArm(
+        links, joints=[LinearJoint(100.0, 0.3, friction=friction)] * 2, joint_friction="motor"
+    )
+    assert both_motor.friction_sides == ("motor", "motor")
+
+
+@pytest.mark.parametrize("side", ["link", "motor"])
+def test_viscous_friction_on_one_side_gives_the_linear_solution(side):
+    """One rigid link (I) on a spring k, motor J_m, viscous friction b on one side:
+    M x'' + D x' + K x = 0 with M = diag(I, J_m), K = k [[1, -1], [-1, 1]] and
+    D = b on the chosen coordinate, solved by the matrix exponential."""
+    import scipy.linalg
+
+    k, jm, b = 40.0, 0.25, 0.4
+    joint = LinearJoint(k, jm, friction=MakkarFriction(0, 0, 0, 0, 0, b), friction_side=side)
+    arm = one_link_on_a_joint(joint)
+    inertia = 2.0 * 1.2**3 / 3 + 0.1
+    M = np.diag([inertia, jm])
+    K = k * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    D = np.zeros((2, 2))
+    D[(0, 0) if side == "link" else (1, 1)] = b
+    Minv = np.linalg.inv(M)
+    A = np.block([[np.zeros((2, 2)), np.eye(2)], [-Minv @ K, -Minv @ D]])
+    x0 = np.array([0.0, 0.1, 0.3, -0.2])
+    sol = simulate(arm, x0, 3.0, n_eval=31)
+    for t, x in zip(sol.t, sol.y.T, strict=True):
+        np.testing.assert_allclose(x, scipy.linalg.expm(A * t) @ x0, rtol=0, atol=1e-9)
+
+
+# ---------------------------------------------------------------- rigid joints
+@pytest.mark.parametrize("coupled", [True, False])
+def test_rigid_joints_add_their_geared_rotors_by_hand(coupled):
+    """Two rigid rods on RigidJoints: rotor 1 on the base adds J_m1 to theta_1;
+    rotor 2 on link 1 turns at theta_1' + N theta_2' (rotor side), so
+    T = 1/2 J_r2 (theta_1' + N theta_2')**2 adds J_r2, N J_r2, N**2 J_r2 = J_m2
+    (Spong's uncoupled rotor: J_m2 at theta_2 only). No motor coordinates."""
+    m1, l1, m2, l2, n2 = 1.3, 1.0, 0.56, 0.8, 6.0
+    jm1, jm2 = 0.2, 0.09
+    links = [fa.Link(l1, 1.0, m1 / l1, n_modes=0), fa.Link(l2, 1.0, m2 / l2, n_modes=0)]
+    joints = [fa.RigidJoint(jm1, damping=0.1, gear_ratio=3.0), fa.RigidJoint(jm2, gear_ratio=n2)]
+    arm = fa.FlexibleArm(links, joints=joints, rotor_coupling=coupled)
+    assert (arm.n_dof, arm.has_flexible_joints, arm.coordinate_names) == (
+        2,
+        False,
+        ["theta1", "theta2"],
+    )
+    q = np.array([0.3, -0.7])
+    expected = two_rigid_rods_mass_matrix(m1, l1, m2, l2, q[1])
+    expected[0, 0] += jm1
+    expected[1, 1] += jm2
+    if coupled:
+        jr2 = jm2 / n2**2
+        expected[0, 0] += jr2
+        expected[0, 1] += n2 * jr2
+        expected[1, 0] += n2 * jr2
+    for backend in ("compiled", "numpy"):
+        np.testing.assert_allclose(arm.mass_matrix(q, backend=backend), expected, rtol=1e-13)
+    rng = np.random.default_rng(4)
+    dq, tau = rng.normal(size=2), rng.normal(size=2)
+    ref = arm.forward_dynamics(q, dq, tau, backend="numpy")
+    for kernel in (dynamics.forward_dynamics_dense, dynamics.forward_dynamics_recursive):
+        out = np.empty(2)
+        kernel(q, dq, tau, arm.arrays, make_workspace(2), out)
+        np.testing.assert_allclose(out, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
+    assert not dynamics.is_two_links_one_mode(arm.arrays)
+
+
+def test_a_rigid_joint_with_viscous_friction_spins_down_exponentially():
+    """One rigid link (I about the joint) on a RigidJoint (rotor J_m, damping c,
+    Makkar friction g6 = b): theta' = w0 exp(-(c + b) t / (I + J_m))."""
+    c, b, jm = 0.3, 0.2, 0.15
+    joint = fa.RigidJoint(jm, damping=c, friction=MakkarFriction(0, 0, 0, 0, 0, b), gear_ratio=9)
+    arm = one_link_on_a_joint(joint)
+    inertia = 2.0 * 1.2**3 / 3 + 0.1
+    sol = simulate(arm, np.array([0.0, 2.0]), 3.0, n_eval=31)
+    rate = 2.0 * np.exp(-(c + b) * sol.t / (inertia + jm))
+    np.testing.assert_allclose(sol.y[1], rate, rtol=1e-9)
+    np.testing.assert_allclose(
+        sol.y[0], 2.0 * (inertia + jm) / (c + b) * (1 - rate / 2.0), rtol=1e-9
+    )
+    np.testing.assert_allclose(arm.damping_matrix, [[c]])
+
+
+def test_a_rigid_joint_is_the_limit_of_stiff_geared_joints():
+    """Three flexible links on geared, coupled joints with damping on the motor: as
+    the springs stiffen the motion tends to that on RigidJoints of the same rotors
+    and damping (the recursive kernel, three links, and the dense one agree)."""
+    links = [
+        fa.Link(1.0, 40.0, 1.0, n_modes=1),
+        fa.Link(0.8, 30.0, 1.0, n_modes=1),
+        fa.Link(0.5, 20.0, 1.0, n_modes=0),
+    ]
+    ratios, jms, damp = (3.0, 8.0, 2.0), (0.05, 0.03, 0.02), (0.1, 0.05, 0.02)
+
+    def torque(t):
+        return np.array([0.4, -0.15, 0.05]) * np.sin(np.pi * t) ** 2
+
+    rigid_joints = [
+        fa.RigidJoint(j, damping=c, gear_ratio=n) for j, c, n in zip(jms, damp, ratios, strict=True)
+    ]
+    kw = {"boundary": "clamped-free", "geometric_stiffening": False}
+    rigid = fa.FlexibleArm(links, joints=rigid_joints, **kw)
+    ref = simulate(rigid, np.zeros(2 * rigid.n_dof), 1.0, torque, n_eval=11).y[:3]
+    errors = []
+    for k in (1e3, 1e4, 1e5):
+        joints = [
+            LinearJoint(k, j, motor_damping=c, gear_ratio=n)
+            for j, c, n in zip(jms, damp, ratios, strict=True)
+        ]
+        arm = fa.FlexibleArm(links, joints=joints, **kw)
+        y = simulate(arm, np.zeros(2 * arm.n_dof), 1.0, torque, n_eval=11).y[:3]
+        errors.append(np.abs(y - ref).max())
+    assert errors[0] > errors[1] > errors[2]
+    assert errors[0] / errors[1] > 5 and errors[1] / errors[2] > 5
+    assert errors[2] < 1e-3 * np.abs(ref).max()
+
+
+def test_an_arm_mixing_rigid_and_flexible_joints_is_refused():
+    links = [fa.Link(1.0, 1.0, 1.0, n_modes=0)] * 2
+    with pytest.raises(
+        ValueError, match=r"'joints'.*all flexible joints.*or all RigidJoint.*\[1\]"
+    ):
+        fa.FlexibleArm(links, joints=[LinearJoint(10.0, 0.1), fa.RigidJoint(0.1)])
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"motor_inertia": -0.1}, ValueError, "'motor_inertia'"),
+        ({"damping": -1.0}, ValueError, "'damping'"),
+        ({"gear_ratio": 0.5}, ValueError, "'gear_ratio'"),
+        ({"friction": 1.0}, TypeError, "'friction'"),
+    ],
+)
+def test_rigid_joint_rejects_bad_parameters(kwargs, error, match):
+    with pytest.raises(error, match=match):
+        fa.RigidJoint(**kwargs)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"damping": -0.1}, ValueError, "'damping'"),
+        ({"friction_side": "gear"}, ValueError, "'friction_side'"),
+        ({"friction_side": 1}, TypeError, "'friction_side'"),
+    ],
+)
+def test_spring_damping_and_friction_side_are_checked(kwargs, error, match):
+    with pytest.raises(error, match=match):
+        LinearJoint(10.0, 0.1, **kwargs)
+    with pytest.raises(error, match=match):
+        NonlinearJoint(10.0, 0.0, 0.0, 1.0, 0.1, **kwargs)
 
 
 FLEX_ARMS = {

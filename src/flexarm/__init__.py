@@ -52,6 +52,8 @@ _NAMES = {
     "Link": "model.link",
     "MakkarFriction": "model.joints",
     "NonlinearJoint": "model.joints",
+    "RigidJoint": "model.joints",
+    "RigidLink": "model.link",
     "SimulationError": "sim.results",
     "SimulationResult": "sim.results",
     "simulate": "sim.closed_loop",
@@ -79,7 +81,9 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run
     from .model.joints import (
         NonlinearJoint as NonlinearJoint,
     )
+    from .model.joints import RigidJoint as RigidJoint
     from .model.link import Link as Link
+    from .model.link import RigidLink as RigidLink
     from .sim.batch import simulate_many as simulate_many
     from .sim.closed_loop import simulate as simulate
     from .sim.open_loop import simulate_open_loop as simulate_open_loop

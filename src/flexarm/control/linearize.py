@@ -229,10 +229,8 @@ def _damping(arm: FlexibleArm) -> F64:
     """Linear damping at rest: modal and motor damping and the joints' friction slope
     at zero velocity, on the side it acts (N m s per coordinate rate)."""
     d = np.array(arm.damping_matrix, dtype=float)
-    m0 = arm.motor_slice.start
-    for i, jt in enumerate(arm.joints or ()):
+    for jt, k in zip(arm.joints or (), arm.friction_coordinates, strict=True):
         if jt.friction is not None:
-            k = m0 + i if arm.joint_friction == "motor" else i
             d[k, k] += float(jt.friction.slope(0.0))
     return d
 

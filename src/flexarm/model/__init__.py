@@ -52,6 +52,8 @@ _NAMES = {
     "MakkarFriction": "joints",
     "NonlinearJoint": "joints",
     "Plant": "plant",
+    "RigidJoint": "joints",
+    "RigidLink": "link",
     "cantilever_roots": "beam",
     "clamped_mass_roots": "beam",
 }
@@ -66,5 +68,7 @@ if TYPE_CHECKING:  # what type checkers see; nothing is imported at run time
     from .joints import LinearJoint as LinearJoint
     from .joints import MakkarFriction as MakkarFriction
     from .joints import NonlinearJoint as NonlinearJoint
+    from .joints import RigidJoint as RigidJoint
     from .link import Link as Link
+    from .link import RigidLink as RigidLink
     from .plant import Plant as Plant

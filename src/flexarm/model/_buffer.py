@@ -54,6 +54,8 @@ __all__ = [
 F64 = NDArray[np.float64]
 
 HEADER = 4  # n_links, n_dof, n_joints, K; then mode_start (n_links + 1), all int64
+# The link and joint rows are N_LINK_COLUMNS and N_JOINT_COLUMNS wide (flexarm.model.arrays):
+# compiled code takes them as constants, so a cache built with other widths is stale.
 
 # Status codes of the entry points: 0 is success; otherwise 1 + 2 k + kind for
 # argument k of (q, dq, tau), kind 0 a wrong shape, 1 a non-finite entry.

@@ -43,14 +43,25 @@ Joint ``i`` couples its motor angle to the link angle by a spring of
 deflection ``Delta_i = q_mi - theta_i`` (:mod:`flexarm.model.joints`): the spring
 torque acts on ``theta_i`` and its reaction on ``q_mi``; the input torque and
 motor damping act on ``q_mi``. Friction acts on the link side, on
-``dtheta_i`` (paper eq. 7), or with ``joint_friction="motor"`` on ``dq_mi``.
-The rotor of joint ``i`` is carried by link ``i-1`` (the base for ``i = 0``):
-its kinetic energy is ``1/2 J_m (carrier angle rate + dq_mi)**2``, which gives
-the inertial coupling ``S`` of the paper (with ``rotor_coupling=False``
-only ``1/2 J_m dq_mi**2``, Spong's simplification). The rotor's mass belongs
-in the hub mass. Joint springs add their potential to ``V``, and gravity (``gravity``) the
-potential of every mass (:mod:`flexarm.model.gravity`):
+``dtheta_i`` (paper eq. 7), or with ``joint_friction="motor"`` on ``dq_mi``
+(a joint's ``friction_side`` chooses for that joint). A joint's ``damping`` is a
+damper across its spring, on ``dq_mi - dtheta_i``.
+The rotor of joint ``i`` is carried by link ``i-1`` (the base for ``i = 0``)
+and turns ``N`` times (the joint's ``gear_ratio``) as fast as the motor angle:
+with ``J_m = N**2 J_r`` its inertia seen on the link side, its kinetic energy is
+``1/2 J_r (carrier angle rate + N dq_mi)**2 = 1/2 J_m (carrier angle rate / N +
+dq_mi)**2``, which gives the inertial coupling ``S`` of the paper (``J_m / N`` per
+carrier rate) and adds the rotor's own ``J_r`` to its carrier (with
+``rotor_coupling=False`` only ``1/2 J_m dq_mi**2``, Spong's simplification).
+The rotor's mass belongs in the hub mass. Joint springs add their potential to ``V``, and
+gravity (``gravity``) the potential of every mass (:mod:`flexarm.model.gravity`):
 :meth:`FlexibleArm.equilibrium` gives the static sag and holding torques.
+
+Rigid joints (:class:`flexarm.model.joints.RigidJoint`) have no spring: the
+motor angle is the joint angle, so ``q`` holds no motor angles; the rotor's
+kinetic energy is ``1/2 J_m (carrier angle rate / N + dtheta_i)**2``, the input
+torque, viscous damping and friction act on ``dtheta_i``. An arm takes flexible
+joints or rigid ones, not both.
 
 Hubs and payload: ``Link.hub_inertia`` turns with its link; ``Link.hub_mass``
 is a point mass at the joint, carried by the previous link's tip. The payload
@@ -93,10 +104,10 @@ from .backends import Backends
 from .beam import NORMALIZATIONS, BeamModes
 from .foreshortening import shortening_matrix
 from .gravity import check_gravity, gravity_forces, gravity_potential
-from .joints import LinearJoint, NonlinearJoint
+from .joints import FRICTION_SIDES, LinearJoint, NonlinearJoint, RigidJoint
 from .kinematics import RigidKinematics, deflected_point
 from .lagrangian import body_terms, christoffel_matrix, mass_matrix_derivatives
-from .link import Link
+from .link import AnyLink, Link, RigidLink
 from .packing import outboard_loads, pack
 from .statics import Equilibrium, equilibrium
 from .validity import PAPER_DEFLECTION_ERROR, PAPER_MODEL_NOTE
@@ -110,9 +121,10 @@ __all__ = [
 ]
 
 BOUNDARIES = ("clamped-free", "clamped-mass")
-FRICTION_SIDES = ("link", "motor")
 
 _OWNER = "FlexibleArm"
+
+AnyJoint = LinearJoint | NonlinearJoint | RigidJoint
 
 
 @dataclass(frozen=True)
@@ -121,8 +133,8 @@ class FlexibleArm(Backends, RigidKinematics):
 
     Parameters
     ----------
-    links : sequence of Link
-        From the base outwards.
+    links : sequence of Link or RigidLink
+        From the base outwards (a :class:`RigidLink` has no modes).
     payload_mass : float
         Point mass at the last tip, kg (>= 0).
     payload_inertia : float
@@ -131,15 +143,18 @@ class FlexibleArm(Backends, RigidKinematics):
         Boundary conditions of the assumed modes (module docstring); default
         ``"clamped-mass"``, which converges with a few modes where the paper's
         ``"clamped-free"`` does not (user guide, "How many modes").
-    joints : sequence of LinearJoint or NonlinearJoint, optional
-        One flexible joint per link (None: rigid joints). Adds the motor angles
-        to ``q``.
+    joints : sequence of LinearJoint, NonlinearJoint or RigidJoint, optional
+        One joint per link (None: rigid joints without rotors or friction).
+        Flexible joints add the motor angles to ``q``; :class:`RigidJoint` s add
+        their rotors, viscous and Makkar friction to the joint angles. An arm
+        takes flexible joints or rigid ones, not both.
     mode_normalization : {"mass", "amplitude", "tip"}
         Scaling of the mode shapes (:mod:`flexarm.modes`); default ``"mass"``.
     mode_amplitude : float
         The paper's ``A`` when ``mode_normalization="amplitude"``.
     joint_friction : {"link", "motor"}
-        Where joint friction acts (default ``"link"``, paper eq. 7).
+        Where joint friction acts (default ``"link"``, paper eq. 7), for every
+        joint whose ``friction_side`` is None.
     rotor_coupling : bool
         Whether a rotor's kinetic energy includes its carrier link's rotation
         (the paper's ``S``; default True).
@@ -167,11 +182,11 @@ class FlexibleArm(Backends, RigidKinematics):
     ((3, 3), 'clamped-mass', True)
     """
 
-    links: Sequence[Link]
+    links: Sequence[Link | RigidLink]
     payload_mass: float = 0.0
     payload_inertia: float = 0.0
     boundary: str = "clamped-mass"
-    joints: Sequence[LinearJoint | NonlinearJoint] | None = None
+    joints: Sequence[LinearJoint | NonlinearJoint | RigidJoint] | None = None
     mode_normalization: str = "mass"
     mode_amplitude: float = 0.1
     joint_friction: str = "link"
@@ -182,7 +197,9 @@ class FlexibleArm(Backends, RigidKinematics):
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        links = check_sequence_of(self.links, "links", _OWNER, Link, "Link")
+        links = check_sequence_of(
+            self.links, "links", _OWNER, (Link, RigidLink), "Link or RigidLink"
+        )
         if len(links) == 0:
             raise InvalidValueError(
                 f"The 'links' parameter of {_OWNER} must hold >= 1 Link. Got 0 instead."
@@ -217,6 +234,8 @@ class FlexibleArm(Backends, RigidKinematics):
                 normalization=self.mode_normalization,
                 amplitude=self.mode_amplitude,
             )
+            if isinstance(lk, Link)
+            else _no_modes(lk.length)
             for lk, (tm, tj) in zip(links, outboard_loads(self), strict=True)
         )
         self._derived["modes"] = modes
@@ -278,21 +297,38 @@ class FlexibleArm(Backends, RigidKinematics):
                 f"The 'n_modes' parameter of {_OWNER}.with_modes must be one number or one "
                 f"per link ({self.n_links}). Got {len(counts)} instead."
             )
-        links = [
-            dataclasses.replace(lk, n_modes=k) for lk, k in zip(self.links, counts, strict=True)
-        ]
+        links: list[AnyLink] = []
+        for i, (lk, k) in enumerate(zip(self.links, counts, strict=True)):
+            if isinstance(lk, Link):
+                links.append(dataclasses.replace(lk, n_modes=k))
+            elif k == 0 or isinstance(n_modes, int | np.integer):
+                links.append(lk)  # a rigid link keeps none
+            else:
+                raise InvalidValueError(
+                    f"The 'n_modes' parameter of {_OWNER}.with_modes must be 0 for link {i}, "
+                    f"a RigidLink. Got {k} instead."
+                )
         return dataclasses.replace(self, links=links, **overrides)
 
     @staticmethod
-    def _check_joints(joints: Any, n_links: int) -> tuple[LinearJoint | NonlinearJoint, ...]:
-        what = "LinearJoint or NonlinearJoint"
-        joints = check_sequence_of(joints, "joints", _OWNER, (LinearJoint, NonlinearJoint), what)
+    def _check_joints(joints: Any, n_links: int) -> tuple[AnyJoint, ...]:
+        what = "LinearJoint, NonlinearJoint or RigidJoint"
+        kinds = (LinearJoint, NonlinearJoint, RigidJoint)
+        joints = check_sequence_of(joints, "joints", _OWNER, kinds, what)
         if len(joints) != n_links:
             raise InvalidValueError(
                 f"The 'joints' parameter of {_OWNER} must hold one joint per link "
                 f"({n_links}). Got {len(joints)} instead."
             )
-        checked: tuple[LinearJoint | NonlinearJoint, ...] = joints
+        rigid = [isinstance(jt, RigidJoint) for jt in joints]
+        if any(rigid) and not all(rigid):
+            raise InvalidValueError(
+                f"The 'joints' parameter of {_OWNER} must be all flexible joints "
+                "(LinearJoint, NonlinearJoint) or all RigidJoint: an arm mixing them is "
+                f"not modelled. Got rigid joints at {[i for i, r in enumerate(rigid) if r]} "
+                "instead (give those a stiff LinearJoint, or make every joint rigid)."
+            )
+        checked: tuple[AnyJoint, ...] = joints
         return checked
 
     # -------------------------------------------------------------- structure
@@ -307,14 +343,21 @@ class FlexibleArm(Backends, RigidKinematics):
 
     @property
     def has_flexible_joints(self) -> bool:
-        return self.joints is not None
+        """Whether the joints are flexible (a spring each): then ``q`` holds the
+        motor angles. Rigid joints (None, or :class:`RigidJoint`) have none."""
+        return self.joints is not None and not isinstance(self.joints[0], RigidJoint)
+
+    @property
+    def _springs(self) -> Sequence[LinearJoint | NonlinearJoint]:
+        """The flexible joints (empty for rigid ones)."""
+        return self.joints if self.has_flexible_joints else ()  # type: ignore[return-value]
 
     @property
     def n_dof(self) -> int:
         """Number of generalised coordinates: joint angles, modal coordinates and,
         with flexible joints, motor angles."""
         n = self.n_links + sum(self.n_modes)
-        return n + self.n_links if self.joints is not None else n
+        return n + self.n_links if self.has_flexible_joints else n
 
     @property
     def modes(self) -> tuple[BeamModes, ...]:
@@ -347,7 +390,7 @@ class FlexibleArm(Backends, RigidKinematics):
     def actuated_slice(self) -> slice:
         """Indices in ``q`` that the joint torques drive: the joint angles for rigid
         joints, the motor angles for flexible joints."""
-        return self.motor_slice if self.joints is not None else slice(0, self.n_links)
+        return self.motor_slice if self.has_flexible_joints else slice(0, self.n_links)
 
     @property
     def coordinate_names(self) -> list[str]:
@@ -356,7 +399,7 @@ class FlexibleArm(Backends, RigidKinematics):
         names = [f"theta{i + 1}" for i in range(self.n_links)]
         for i, nm in enumerate(self.n_modes):
             names += [f"delta{i + 1}_{j + 1}" for j in range(nm)]
-        if self.joints is not None:
+        if self.has_flexible_joints:
             names += [f"qm{i + 1}" for i in range(self.n_links)]
         return names
 
@@ -367,7 +410,7 @@ class FlexibleArm(Backends, RigidKinematics):
         (``a1 - ksw``) coupling ``theta_i`` and ``q_mi``."""
         K = np.diag(self.arrays.stiffness)
         m = self.motor_slice.start
-        for i, jt in enumerate(self.joints or ()):
+        for i, jt in enumerate(self._springs):
             k = float(jt.tangent_stiffness(0.0))
             K[i, i] += k
             K[m + i, m + i] += k
@@ -377,13 +420,32 @@ class FlexibleArm(Backends, RigidKinematics):
 
     @property
     def damping_matrix(self) -> NDArray[np.float64]:
-        """Linear damping ``D`` (modal damping, motor damping), shape ``(n_dof, n_dof)``,
-        in N m s per coordinate rate. Joint friction is not included."""
-        D = np.diag(self.arrays.damping)
+        """Linear damping ``D`` (modal damping, motor damping, the joints' dampers
+        across their springs), shape ``(n_dof, n_dof)``, in N m s per coordinate
+        rate. Joint friction is not included."""
+        D = np.diag(self.arrays.damping)  # with rigid joints' viscous friction
         m = self.motor_slice.start
-        for i, jt in enumerate(self.joints or ()):
+        for i, jt in enumerate(self._springs):
             D[m + i, m + i] += jt.motor_damping
+            c = jt.damping
+            D[i, i] += c
+            D[m + i, m + i] += c
+            D[i, m + i] -= c
+            D[m + i, i] -= c
         return D
+
+    @property
+    def friction_sides(self) -> tuple[str, ...]:
+        """Where each joint's friction acts, ``"link"`` or ``"motor"`` (a joint's
+        ``friction_side``, else the arm's ``joint_friction``); empty without joints."""
+        return tuple(jt.friction_side or self.joint_friction for jt in self.joints or ())
+
+    @property
+    def friction_coordinates(self) -> tuple[int, ...]:
+        """The index in ``q`` on whose rate each joint's friction acts (the joint
+        angle or the motor angle, :attr:`friction_sides`)."""
+        m = self.motor_slice.start
+        return tuple(m + i if side == "motor" else i for i, side in enumerate(self.friction_sides))
 
     @property
     def input_matrix(self) -> NDArray[np.float64]:
@@ -446,17 +508,20 @@ class FlexibleArm(Backends, RigidKinematics):
         out = -self.arrays.stiffness * q - self.arrays.damping * dq
         if self.gravity is not None:
             out = out + gravity_forces(self, q)
-        if self.joints is None:
+        if not self.has_flexible_joints:  # rigid joints: damping in arrays.damping
             out[: self.n_links] += tau
+            for i, jt in enumerate(self.joints or ()):
+                if jt.friction is not None:
+                    out[i] -= jt.friction(dq[i])
             return out  # type: ignore[no-any-return]
         m0 = self.motor_slice.start
         for i, jt in enumerate(self.joints):
             m = m0 + i
-            ts = jt.torque(q[m] - q[i])
+            ts = jt.torque(q[m] - q[i]) + jt.damping * (dq[m] - dq[i])
             out[i] += ts
             out[m] += tau[i] - ts - jt.motor_damping * dq[m]
             if jt.friction is not None:
-                k = m if self.joint_friction == "motor" else i
+                k = self.friction_coordinates[i]
                 out[k] -= jt.friction(dq[k])
         return out  # type: ignore[no-any-return]
 
@@ -476,7 +541,7 @@ class FlexibleArm(Backends, RigidKinematics):
         if self.gravity is not None:
             potential += gravity_potential(self, q)
         m0 = self.motor_slice.start
-        for i, jt in enumerate(self.joints or ()):
+        for i, jt in enumerate(self._springs):
             potential += float(jt.potential(q[m0 + i] - q[i]))
         return float(kinetic), float(potential)
 
@@ -581,3 +646,9 @@ class FlexibleArm(Backends, RigidKinematics):
     def link_lengths(self) -> NDArray[np.float64]:
         """Link lengths, m, shape ``(n_links,)``."""
         return np.array([lk.length for lk in self.links], dtype=float)
+
+
+def _no_modes(length: float) -> BeamModes:
+    """The empty modal basis of a rigid link of ``length`` m: no modes, so the beam's
+    stiffness and density never enter (placeholders of 1)."""
+    return BeamModes(length, 1.0, 1.0, 0)

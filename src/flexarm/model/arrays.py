@@ -50,12 +50,18 @@ __all__ = [
     "J_HAS_FRICTION",
     "J_INERTIA",
     "J_KSW",
+    "J_SPRING_DAMPING",
     "LEN",
     "MASS",
     "N_CHAIN_COLUMNS",
     "N_JOINT_COLUMNS",
     "N_LINK_COLUMNS",
+    "ROTOR_COUPLING",
+    "ROTOR_FRICTION",
+    "ROTOR_G1",
+    "ROTOR_INERTIA",
     "STATIC",
+    "TIP_INERTIA",
     "ArmArrays",
     "Workspace",
     "field_shapes",
@@ -69,11 +75,15 @@ F64 = NDArray[np.float64]
 
 # Columns of ArmArrays.link
 LEN, MASS, STATIC, INERTIA, HUB_MASS = 0, 1, 2, 3, 4
-N_LINK_COLUMNS = 5
+TIP_INERTIA = 5  # rotary inertia at the tip, turning with the tip slope (not the last link's)
+ROTOR_INERTIA, ROTOR_COUPLING = 6, 7  # a rigid joint's rotor: J_m, 1 / N (0: uncoupled)
+ROTOR_FRICTION, ROTOR_G1 = 8, 9  # a rigid joint's friction: flag, Makkar g1..g6
+N_LINK_COLUMNS = 15
 # Columns of ArmArrays.joint
 J_A1, J_A2, J_KSW, J_ASW, J_INERTIA, J_DAMPING, J_COUPLED = 0, 1, 2, 3, 4, 5, 6
 J_HAS_FRICTION, J_FRICTION_ON_MOTOR, J_G1 = 7, 8, 9
-N_JOINT_COLUMNS = 15
+J_SPRING_DAMPING = 15  # viscous damping across the spring, on dq_m - dq
+N_JOINT_COLUMNS = 16
 # Rows of Workspace.axial (one link's foreshortening terms, by local mode index)
 AX_TIP = 0  # u(L), delta_dot' S(L) delta_dot, (S(L) delta) . delta_dot
 AX_SL = 1  # S(L) delta
@@ -106,10 +116,15 @@ class ArmArrays(NamedTuple):
     mode_start : int64 array, shape (n_links + 1,)
         Index in ``q`` of link ``i``'s first modal coordinate; link ``i`` owns
         ``q[mode_start[i]:mode_start[i + 1]]``.
-    link : float array, shape (n_links, 5)
+    link : float array, shape (n_links, 15)
         Per link: length (m), mass ``rho L`` (kg), static moment ``rho L**2 / 2``
-        (kg m), inertia about the joint ``rho L**3 / 3 + hub_inertia`` (kg m**2),
-        hub mass at the joint (kg).
+        (kg m), inertia about the joint ``rho L**3 / 3 + hub_inertia`` (kg m**2)
+        (a rigid link: its mass, first moment and inertia about the joint), the
+        point mass at the joint (kg: its hub and the previous link's tip body),
+        the rotary inertia of its tip body (kg m**2; the last link's is in
+        ``payload``), and a rigid joint's rotor (:class:`RigidJoint`) driving it:
+        ``J_m`` (kg m**2), coupling ``1 / N`` (0: uncoupled or no rotor), friction
+        flag and Makkar ``g1..g6``.
     mass_integral, moment_integral, tip_deflection, tip_slope : float arrays, shape (n_dof,)
         ``int rho phi``, ``int rho x phi``, ``phi(L)``, ``phi'(L)`` at each modal
         coordinate's index in ``q`` (zero at joint indices).
@@ -135,12 +150,15 @@ class ArmArrays(NamedTuple):
         The gravitational acceleration ``(g_x, g_y)`` in the base frame, m/s**2
         (:mod:`flexarm.model.gravity`). ``(0, 0)`` (an arm built with
         ``gravity=None``) switches every gravity term off: the kernels skip them.
-    joint : float array, shape (n_joints, 15)
+    joint : float array, shape (n_joints, 16)
         Flexible joints (``n_joints`` is 0 for rigid joints or ``n_links``), one
         row each: ``a1, a2, ksw, asw`` of the spring law (a linear joint is
         ``k, 0, 0, 0``), reflected motor inertia ``J_m``, motor viscous damping,
-        rotor coupling flag (1: the rotor turns with its carrier link), friction
-        flag, friction side (0: link, 1: motor), Makkar ``g1..g6``. The motor
+        rotor coupling ``1 / N`` (``N`` the gear ratio; 0: Spong's uncoupled
+        rotor: the rotor's kinetic energy is ``1/2 J_m (carrier rate / N +
+        dq_m)**2`` in link-side units), friction
+        flag, friction side (0: link, 1: motor), Makkar ``g1..g6``, the spring's
+        viscous damping (N m s/rad, on ``dq_m - dq``). The motor
         angle of joint ``i`` is ``q[mode_start[-1] + i]``.
     """
 

@@ -72,7 +72,7 @@ def _link_terms(arm: Any, q: NDArray[Any]) -> tuple[list[Any], list[Any], list[A
     gx, gy = arm.gravity
     n_links = arm.n_links
     carried = np.zeros(n_links)
-    mass = arm.payload_mass
+    mass = a.payload[0]  # the payload and the last link's tip body
     for i in range(n_links - 1, -1, -1):
         carried[i] = mass
         mass += a.link[i, MASS] + a.link[i, HUB_MASS]

@@ -1,4 +1,5 @@
-r"""Flexible joints: the linear (Spong) and nonlinear (Ulrich) models, Makkar friction.
+r"""Joints: the flexible linear (Spong) and nonlinear (Ulrich) models, the rigid
+joint, Makkar friction.
 
 A flexible joint couples a motor angle ``q_m`` (reflected to the link side of
 the gear) to the link angle ``q`` through a torsional spring of deflection
@@ -17,13 +18,17 @@ the gear) to the link angle ``q`` through a torsional spring of deflection
   harmonic drives below about 1 N m). ``a1 > ksw`` keeps it positive.
   Its potential is closed-form:
   ``V = a1 Delta**2 / 2 + a2 Delta**4 / 4 - ksw (1 - exp(-asw Delta**2)) / (2 asw)``.
+* :class:`RigidJoint`: no spring, the motor drives the link through its gear
+  (rotor inertia, viscous and Makkar friction on the joint rate).
 * :class:`MakkarFriction`:
   ``f(v) = g1 (tanh(g2 v) - tanh(g3 v)) + g4 tanh(g5 v) + g6 v`` — a Stribeck
   hump (``g2 > g3``), smoothed Coulomb friction and viscous friction; the
   static (breakaway) level is about ``g1 + g4``.
 
 Where friction acts is the arm's choice (:class:`flexarm.FlexibleArm`): on the
-link side of the spring (paper eq. 7) by default.
+link side of the spring (paper eq. 7) by default; a joint's ``friction_side``
+overrides it for that joint. A joint's ``damping`` is a viscous damper across
+the spring, on the deflection rate ``dq_m - dq``.
 
 Default parameters
 ------------------
@@ -50,6 +55,8 @@ asw        1.6e7 1/rad**2    windup region ``|Delta| < 1/sqrt(asw)`` = 2.5e-4 ra
 a2         4.0e7 N m/rad**3  hardening adds 10 % to the stiffness at 5e-3 rad
                              (50 N m), a typical cubic fit of harmonic-drive curves
 J_m        0.3 kg m**2       rotor 3e-5 kg m**2 reflected through a 100:1 gear
+                             (``gear_ratio=100``: the rotor adds its own 3e-5
+                             kg m**2 to the link that carries it)
 g1, g4     0.5, 1.0 N m      Stribeck excess and Coulomb level: breakaway about
                              1.5 N m, 3 % of a 50 N m rated torque
 g2, g3     100, 10 s/rad     Stribeck velocity between 0.01 and 0.1 rad/s (as in
@@ -69,10 +76,25 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import validate_real_fields
+from .._validation import check_option, check_real, validate_real_fields
 from ..errors import InvalidTypeError, InvalidValueError
 
-__all__ = ["Joint", "LinearJoint", "MakkarFriction", "NonlinearJoint"]
+__all__ = [
+    "DEFAULT_GEAR_RATIO",
+    "FRICTION_SIDES",
+    "Joint",
+    "LinearJoint",
+    "MakkarFriction",
+    "NonlinearJoint",
+    "RigidJoint",
+]
+
+FRICTION_SIDES = ("link", "motor")
+"""Where a flexible joint's friction acts: on the link angle or the motor angle."""
+
+DEFAULT_GEAR_RATIO = 100.0
+"""The gear of the documented default joints (module docstring), motor turns per
+joint turn."""
 
 
 def _as_float_array(x: ArrayLike, name: str, owner: str) -> NDArray[np.float64]:
@@ -178,6 +200,16 @@ class LinearJoint:
         Viscous damping on the motor side, N m s/rad (>= 0).
     friction : MakkarFriction or None
         Joint friction (None: frictionless).
+    gear_ratio : float
+        ``N``, motor turns per joint turn (>= 1; default 1, a direct drive). The
+        rotor's own inertia is ``J_m / N**2``: what it adds to its carrier link
+        when the arm couples rotors (``FlexibleArm(rotor_coupling=True)``).
+    damping : float
+        Viscous damping of the spring, N m s/rad (>= 0): the torque
+        ``damping (dq_m - dq)`` on the link and its reaction on the motor.
+    friction_side : {"link", "motor"} or None
+        Where this joint's friction acts; None (default): the arm's
+        ``joint_friction``.
 
     Examples
     --------
@@ -189,18 +221,32 @@ class LinearJoint:
     motor_inertia: float
     motor_damping: float = 0.0
     friction: MakkarFriction | None = None
+    gear_ratio: float = 1.0
+    damping: float = 0.0
+    friction_side: str | None = None
 
     def __post_init__(self) -> None:
         owner = "LinearJoint"
         validate_real_fields(
-            self, owner, positive=("stiffness", "motor_inertia"), nonnegative=("motor_damping",)
+            self,
+            owner,
+            positive=("stiffness", "motor_inertia"),
+            nonnegative=("motor_damping", "damping"),
         )
         _check_friction(self.friction, owner)
+        _check_gear_ratio(self, owner)
+        _check_friction_side(self.friction_side, owner)
 
     @classmethod
     def default(cls) -> LinearJoint:
-        """``k = 1e4 N m/rad``, ``J_m = 0.3 kg m**2`` (module docstring)."""
-        return cls(1.0e4, 0.3)
+        """``k = 1e4 N m/rad``, ``J_m = 0.3 kg m**2`` through a 100:1 gear (module
+        docstring)."""
+        return cls(1.0e4, 0.3, gear_ratio=DEFAULT_GEAR_RATIO)
+
+    @property
+    def rotor_inertia(self) -> float:
+        """The rotor's own inertia about its axis, ``J_m / N**2`` (kg m**2)."""
+        return self.motor_inertia / self.gear_ratio**2
 
     def torque(self, deflection: ArrayLike) -> NDArray[np.float64]:
         """Spring torque ``k Delta`` in N m for ``Delta = q_m - q`` (rad), any shape."""
@@ -242,6 +288,13 @@ class NonlinearJoint:
         Joint friction (None: frictionless).
     motor_damping : float
         Viscous damping on the motor side, N m s/rad (>= 0).
+    gear_ratio : float
+        ``N``, motor turns per joint turn (>= 1; default 1): as for
+        :class:`LinearJoint`.
+    damping : float
+        Viscous damping of the spring, N m s/rad (>= 0), as for :class:`LinearJoint`.
+    friction_side : {"link", "motor"} or None
+        Where this joint's friction acts (None: the arm's ``joint_friction``).
 
     Examples
     --------
@@ -257,6 +310,9 @@ class NonlinearJoint:
     motor_inertia: float
     friction: MakkarFriction | None = None
     motor_damping: float = 0.0
+    gear_ratio: float = 1.0
+    damping: float = 0.0
+    friction_side: str | None = None
 
     def __post_init__(self) -> None:
         owner = "NonlinearJoint"
@@ -264,19 +320,28 @@ class NonlinearJoint:
             self,
             owner,
             positive=("a1", "asw", "motor_inertia"),
-            nonnegative=("a2", "ksw", "motor_damping"),
+            nonnegative=("a2", "ksw", "motor_damping", "damping"),
         )
+        _check_friction_side(self.friction_side, owner)
         if not self.a1 > self.ksw:
             raise InvalidValueError(
                 f"The 'ksw' parameter of {owner} must be < a1 = {self.a1} (stiffness "
                 f"a1 - ksw must be positive at zero deflection). Got {self.ksw} instead."
             )
         _check_friction(self.friction, owner)
+        _check_gear_ratio(self, owner)
 
     @classmethod
     def default(cls, friction: MakkarFriction | None = None) -> NonlinearJoint:
         """The documented space-manipulator-class joint (module docstring)."""
-        return cls(1.0e4, 4.0e7, 6.0e3, 1.6e7, 0.3, friction=friction)
+        return cls(
+            1.0e4, 4.0e7, 6.0e3, 1.6e7, 0.3, friction=friction, gear_ratio=DEFAULT_GEAR_RATIO
+        )
+
+    @property
+    def rotor_inertia(self) -> float:
+        """The rotor's own inertia about its axis, ``J_m / N**2`` (kg m**2)."""
+        return self.motor_inertia / self.gear_ratio**2
 
     def torque(self, deflection: ArrayLike) -> NDArray[np.float64]:
         """Spring torque ``tau_s(Delta)`` in N m for ``Delta = q_m - q`` (rad), any shape."""
@@ -311,7 +376,72 @@ class NonlinearJoint:
         return np.array([self.a1, self.a2, self.ksw, self.asw])
 
 
+@dataclass(frozen=True)
+class RigidJoint:
+    """A joint without a spring: the motor drives its link through the gear directly.
+
+    The joint angle is the motor angle (link side): an arm of rigid joints has no
+    motor coordinates. The rotor turns ``N`` times as fast as the joint relative
+    to its carrier (the previous link's tip), so its kinetic energy is
+    ``1/2 J_m (carrier rate / N + dtheta)**2`` with coupled rotors
+    (``FlexibleArm(rotor_coupling=True)``), ``1/2 J_m dtheta**2`` without.
+
+    Parameters
+    ----------
+    motor_inertia : float
+        Rotor inertia reflected to the link side, ``J_m = N**2 J_r`` in kg m**2 (>= 0).
+    damping : float
+        Viscous friction on the joint rate, N m s/rad (>= 0).
+    friction : MakkarFriction or None
+        Joint friction on the joint rate (None: frictionless).
+    gear_ratio : float
+        ``N``, motor turns per joint turn (>= 1; default 1, a direct drive).
+
+    Examples
+    --------
+    >>> RigidJoint(0.3, damping=0.5, gear_ratio=100).rotor_inertia
+    3e-05
+    """
+
+    motor_inertia: float = 0.0
+    damping: float = 0.0
+    friction: MakkarFriction | None = None
+    gear_ratio: float = 1.0
+
+    def __post_init__(self) -> None:
+        owner = "RigidJoint"
+        validate_real_fields(self, owner, nonnegative=("motor_inertia", "damping"))
+        _check_friction(self.friction, owner)
+        _check_gear_ratio(self, owner)
+
+    @property
+    def rotor_inertia(self) -> float:
+        """The rotor's own inertia about its axis, ``J_m / N**2`` (kg m**2)."""
+        return self.motor_inertia / self.gear_ratio**2
+
+    @property
+    def friction_side(self) -> str:
+        """``"link"``: a rigid joint's friction acts on its one angle."""
+        return "link"
+
+
 Joint = LinearJoint | NonlinearJoint
+"""A flexible joint (a spring between motor and link)."""
+
+
+def _check_gear_ratio(joint: LinearJoint | NonlinearJoint | RigidJoint, owner: str) -> None:
+    ratio = check_real(joint.gear_ratio, "gear_ratio", owner, positive=True)
+    if ratio < 1.0:
+        raise InvalidValueError(
+            f"The 'gear_ratio' parameter of {owner} must be >= 1 (motor turns per joint "
+            f"turn). Got {ratio} instead."
+        )
+    object.__setattr__(joint, "gear_ratio", ratio)
+
+
+def _check_friction_side(side: object, owner: str) -> None:
+    if side is not None:
+        check_option(side, "friction_side", owner, FRICTION_SIDES)
 
 
 def _check_friction(friction: object, owner: str) -> None:

@@ -18,7 +18,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from .arrays import ArmArrays
+from .arrays import HUB_MASS, TIP_INERTIA, ArmArrays
 from .packing import ArmParameters
 
 __all__ = [
@@ -56,6 +56,7 @@ def body_terms(arm: LagrangianArm, q: NDArray[Any], dq: NDArray[Any] | None) -> 
     A = np.zeros(n)  # gradient of the link's absolute angle (constant)
     b = np.zeros(2, dtype=dtype)  # inertial acceleration of the joint at qddot = 0
     bodies: list[tuple[Any, ...]] = []
+    zero = np.zeros(1)
     for i in range(N):
         s = arm.modal_slice(i)
         if i > 0:
@@ -65,18 +66,24 @@ def body_terms(arm: LagrangianArm, q: NDArray[Any], dq: NDArray[Any] | None) -> 
             U, b = Rt @ U, Rt @ b
             A = A.copy()
             A[prev] += a.tip_slope[prev]
+            # the tip body of link i-1 turns with its tip (its mass is at the joint, below)
+            jt_tip = a.link[i - 1, TIP_INERTIA]
+            bodies.append((A[None, :].copy(), np.array([[jt_tip]]), None if dq is None else zero))
         if arm.joints is not None:
-            # rotor i spins at (carrier angle rate + dq_mi); A is the carrier's gradient
-            row = A.copy() if arm.rotor_coupling else np.zeros(n)
-            row[arm.motor_slice.start + i] += 1.0
-            jm = arm.joints[i].motor_inertia
-            bodies.append((row[None, :], np.array([[jm]]), None if dq is None else np.zeros(1)))
-        if i > 0:
-            mh = arm.links[i].hub_mass
+            # rotor i spins at N_i (carrier angle rate / N_i + dq_i), dq_i its motor angle
+            # (flexible joints) or joint angle (rigid), link side:
+            # T = 1/2 J_m (carrier rate / N_i + dq_i)**2; A is the carrier's gradient
+            jt = arm.joints[i]
+            row = A / jt.gear_ratio if arm.rotor_coupling else np.zeros(n)
+            row[arm.motor_slice.start + i if arm.has_flexible_joints else i] += 1.0
+            jm = jt.motor_inertia
+            bodies.append((row[None, :], np.array([[jm]]), None if dq is None else zero))
+        if i > 0:  # the hub at joint i and the tip body of link i-1
+            mh = a.link[i, HUB_MASS]
             bodies.append((U.copy(), mh * np.eye(2), None if dq is None else mh * b))
         A = A.copy()
         A[i] += 1.0
-        L, m, cx, ia, _ = a.link[i]
+        L, m, cx, ia = a.link[i, :HUB_MASS]
         delta = q[s]
         nm = delta.shape[0]
         D = np.zeros((nm, n))
@@ -104,7 +111,7 @@ def body_terms(arm: LagrangianArm, q: NDArray[Any], dq: NDArray[Any] | None) -> 
     s = arm.modal_slice(N - 1)
     Ap = A.copy()
     Ap[s] += a.tip_slope[s]
-    mp, jp = arm.payload_mass, arm.payload_inertia
+    mp, jp = a.payload[0], a.payload[1]  # with the last link's tip body
     bodies.append((U.copy(), mp * np.eye(2), None if dq is None else mp * b))
     bodies.append((Ap[None, :], np.array([[jp]]), None if dq is None else np.zeros(1)))
     return bodies

@@ -12,8 +12,8 @@ from . import arrays as layout
 from .arrays import N_JOINT_COLUMNS, N_LINK_COLUMNS, ArmArrays, pack_arm_arrays
 from .beam import BeamModes
 from .foreshortening import foreshortening_integrals
-from .joints import LinearJoint, NonlinearJoint
-from .link import Link
+from .joints import LinearJoint, NonlinearJoint, RigidJoint
+from .link import AnyLink
 
 __all__ = ["ArmParameters", "PackableArm", "outboard_loads", "pack"]
 
@@ -26,9 +26,11 @@ class ArmParameters(Protocol):
     :func:`flexarm.model.lagrangian.body_terms`)."""
 
     @property
-    def links(self) -> Sequence[Link]: ...
+    def links(self) -> Sequence[AnyLink]: ...
     @property
-    def joints(self) -> Sequence[LinearJoint | NonlinearJoint] | None: ...
+    def joints(self) -> Sequence[LinearJoint | NonlinearJoint | RigidJoint] | None: ...
+    @property
+    def has_flexible_joints(self) -> bool: ...
     @property
     def payload_mass(self) -> float: ...
     @property
@@ -60,23 +62,26 @@ class PackableArm(ArmParameters, Protocol):
 
 def outboard_loads(arm: PackableArm) -> list[tuple[float, float]]:
     """Tip mass (kg) and rotary inertia about the tip (kg m**2) loading each link's
-    modes: zero for ``"clamped-free"``; for ``"clamped-mass"`` everything outboard
-    (beams, hub masses and inertias, rotors, payload), the chain straight."""
+    modes: zero for ``"clamped-free"``; for ``"clamped-mass"`` the link's own tip
+    body and everything outboard (links, hub masses and inertias, rotors, tip
+    bodies, payload), the chain straight."""
     links = arm.links
     if arm.boundary == "clamped-free":
         return [(0.0, 0.0)] * len(links)
     loads = []
     for i in range(len(links)):
-        mass = arm.payload_mass
-        inertia = arm.payload_inertia
+        mass = arm.payload_mass + links[i].tip_mass  # its own tip body, then outboard
+        inertia = arm.payload_inertia + links[i].tip_inertia
         d = 0.0  # distance from tip i to the base of the next outboard link
         for k, lk in enumerate(links[i + 1 :], start=i + 1):
-            mass += lk.hub_mass + lk.mass
+            mass += lk.hub_mass + lk.mass + lk.tip_mass
             inertia += lk.hub_mass * d**2 + lk.hub_inertia
-            if arm.joints is not None:
-                inertia += arm.joints[k].motor_inertia
-            inertia += lk.linear_density * ((d + lk.length) ** 3 - d**3) / 3.0
+            if arm.joints is not None:  # the rotor's own inertia rides on the chain
+                jt = arm.joints[k]
+                inertia += jt.motor_inertia / jt.gear_ratio**2
+            inertia += lk.inertia_behind(d)
             d += lk.length
+            inertia += lk.tip_mass * d**2 + lk.tip_inertia
         inertia += arm.payload_mass * d**2
         loads.append((mass, inertia))
     return loads
@@ -93,26 +98,47 @@ def pack(arm: PackableArm) -> ArmArrays:
     v, w, h, g = (np.zeros(n) for _ in range(4))
     md = np.zeros((n, n))
     k, d = np.zeros(n), np.zeros(n)
+    rigid_joints = arm.joints is not None and isinstance(arm.joints[0], RigidJoint)
     for i, (lk, bm) in enumerate(zip(arm.links, arm.modes, strict=True)):
-        L, rho = lk.length, lk.linear_density
-        link[i] = (L, rho * L, rho * L**2 / 2, rho * L**3 / 3 + lk.hub_inertia, lk.hub_mass)
+        row = link[i]
+        row[: layout.HUB_MASS + 1] = (
+            lk.length,
+            lk.mass,
+            lk.first_moment,
+            lk.joint_inertia + lk.hub_inertia,
+            lk.hub_mass + (arm.links[i - 1].tip_mass if i > 0 else 0.0),
+        )
+        if i + 1 < N:  # the last link's tip body is in the payload
+            row[layout.TIP_INERTIA] = lk.tip_inertia
+        if rigid_joints:
+            assert arm.joints is not None
+            jt = arm.joints[i]
+            row[layout.ROTOR_INERTIA] = jt.motor_inertia
+            row[layout.ROTOR_COUPLING] = 1.0 / jt.gear_ratio if arm.rotor_coupling else 0.0
+            d[i] = jt.damping
+            if jt.friction is not None:
+                row[layout.ROTOR_FRICTION] = 1.0
+                row[layout.ROTOR_G1 : layout.ROTOR_G1 + 6] = jt.friction.params
         s = slice(start[i], start[i + 1])
         v[s], w[s] = bm.mass_integral, bm.moment_integral
         h[s], g[s] = bm.tip_deflection, bm.tip_slope
         md[s, s] = bm.modal_mass
         k[s] = np.diag(bm.modal_stiffness)
         d[s] = 2.0 * lk.modal_damping * bm.frequencies * np.diag(bm.generalized_mass)
-    joint = np.zeros((len(arm.joints or ()), N_JOINT_COLUMNS))
-    for i, jt in enumerate(arm.joints or ()):
+    springs = () if rigid_joints else arm.joints or ()
+    joint = np.zeros((len(springs), N_JOINT_COLUMNS))
+    for i, jt in enumerate(springs):
         row = joint[i]
         row[layout.J_A1 : layout.J_ASW + 1] = jt.spring_params
         row[layout.J_INERTIA] = jt.motor_inertia
         row[layout.J_DAMPING] = jt.motor_damping
-        row[layout.J_COUPLED] = float(arm.rotor_coupling)
+        row[layout.J_COUPLED] = 1.0 / jt.gear_ratio if arm.rotor_coupling else 0.0
         if jt.friction is not None:
             row[layout.J_HAS_FRICTION] = 1.0
-            row[layout.J_FRICTION_ON_MOTOR] = float(arm.joint_friction == "motor")
-            row[layout.J_G1 :] = jt.friction.params
+            side = jt.friction_side or arm.joint_friction
+            row[layout.J_FRICTION_ON_MOTOR] = float(side == "motor")
+            row[layout.J_G1 : layout.J_G1 + 6] = jt.friction.params
+        row[layout.J_SPRING_DAMPING] = jt.damping
     shortening = _pack_foreshortening(arm, start) if arm.geometric_stiffening else {}
     return pack_arm_arrays(
         mode_start=start,
@@ -124,7 +150,12 @@ def pack(arm: PackableArm) -> ArmArrays:
         modal_mass=md,
         stiffness=k,
         damping=d,
-        payload=np.array([arm.payload_mass, arm.payload_inertia]),
+        payload=np.array(
+            [
+                arm.payload_mass + arm.links[-1].tip_mass,
+                arm.payload_inertia + arm.links[-1].tip_inertia,
+            ]
+        ),
         joint=joint,
         gravity=None if arm.gravity is None else np.array(arm.gravity, dtype=float),
         **shortening,

@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from .arrays import ArmArrays, Workspace
 from .dynamics import joint_forces, mass_and_bias
-from .dynamics._dense import ldlt_solve
+from .dynamics._dense import ldlt_solve, rigid_joint_friction
 from .dynamics._gravity import gravity_forces
 
 __all__ = ["free_range", "prescribed_accelerations", "prescribed_dynamics"]
@@ -81,6 +81,8 @@ def prescribed_dynamics(
         for i in range(n_links):
             tau[i] = 0.0
         joint_forces(q, dq, tau, model, rhs)
+    else:
+        rigid_joint_friction(dq, model, rhs)
     gravity_forces(q, model, rhs)
     f0, f1 = free_range(model, n)
     a0 = f1 if f0 == 0 else 0  # first actuated coordinate

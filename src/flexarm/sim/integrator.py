@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 from .._compile import compiled_as
 from ..errors import InvalidValueError
 from ..model.arrays import ArmArrays, Workspace
+from ..model.dynamics import is_two_links_one_mode
 from ..model.kernel_checks import check_model, check_vector, check_workspace
 from . import _rk4
 from ._rk4 import DIVERGENCE_RATE
@@ -71,10 +72,10 @@ def rk4_step_two_links_one_mode(
     and sums in registers. Arguments checked."""
     owner = "rk4_step_two_links_one_mode"
     n = _check_step(q, dq, (tau0, tau_mid, tau1), model, owner)
-    if n != 4 or model.joint.shape[0] or model.mode_start.shape[0] != 3:
+    if n != 4 or not is_two_links_one_mode(model):
         raise InvalidValueError(
             f"The 'model' parameter of {owner} must have two links with one mode each and "
-            "rigid joints. Got another structure instead."
+            "rigid joints (without rotors or friction). Got another structure instead."
         )
     _rk4.rk4_step_two_links_one_mode(q, dq, tau0, tau_mid, tau1, float(h), model)
 

@@ -49,9 +49,7 @@ def _linear_matrices(arm: FlexibleArm, q: F64) -> tuple[F64, F64, F64]:
     K = np.asarray(arm.stiffness_matrix, dtype=np.float64)
     D = np.array(arm.damping_matrix, dtype=np.float64)
     if arm.joints is not None:
-        m0 = arm.motor_slice.start
-        for i, joint in enumerate(arm.joints):
-            row = i if arm.joint_friction == "link" else m0 + i
+        for joint, row in zip(arm.joints, arm.friction_coordinates, strict=True):
             D[row, row] += _friction_slope(getattr(joint, "friction", None))
     return M, K, D
 

@@ -288,6 +288,12 @@ def _check_paper_structure(model: ArmArrays, owner: str) -> None:
             f"The 'model' parameter of {owner} must have two links with one mode each and "
             f"rigid joints. Got {n_links} links and {n} coordinates instead."
         )
+    if not _two_links.is_two_links_one_mode(model):
+        raise InvalidValueError(
+            f"The 'model' parameter of {owner} must have two links with one mode each, "
+            "rigid joints without rotors or friction, no tip inertia on the first link "
+            "and no geometric stiffening. Got another structure instead."
+        )
 
 
 def point_kinematics(

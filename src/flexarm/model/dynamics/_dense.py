@@ -18,7 +18,20 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import arrays as layout
-from ..arrays import HUB_MASS, INERTIA, LEN, MASS, STATIC, ArmArrays, Workspace
+from ..arrays import (
+    HUB_MASS,
+    INERTIA,
+    LEN,
+    MASS,
+    ROTOR_COUPLING,
+    ROTOR_FRICTION,
+    ROTOR_G1,
+    ROTOR_INERTIA,
+    STATIC,
+    TIP_INERTIA,
+    ArmArrays,
+    Workspace,
+)
 from ._gravity import gravity_forces
 from ._link_terms import link_foreshortening, link_sums
 
@@ -30,6 +43,7 @@ __all__ = [
     "ldlt_factor",
     "ldlt_solve",
     "mass_and_bias",
+    "rigid_joint_friction",
 ]
 
 F64 = NDArray[np.float64]
@@ -41,9 +55,10 @@ def joint_forces(
 ) -> None:  # pragma: no cover
     """Add the flexible joints' generalised forces to ``rhs``.
 
-    Spring torque ``tau_s(q_m - q)`` on the link angle and its reaction on the
-    motor, the input torque and motor damping on the motor, friction on the
-    link (or motor) side.
+    Spring torque ``tau_s(q_m - q)`` and the damper across it,
+    ``c (dq_m - dq)``, on the link angle and their reaction on the motor, the input
+    torque and motor damping on the motor, friction on each joint's side (link or
+    motor).
     """
     jt = arrays.joint
     m0 = arrays.mode_start[arrays.mode_start.shape[0] - 1]
@@ -53,19 +68,34 @@ def joint_forces(
         ts = (jt[i, layout.J_A1] + jt[i, layout.J_A2] * d * d) * d
         if jt[i, layout.J_KSW] != 0.0:
             ts -= jt[i, layout.J_KSW] * np.exp(-jt[i, layout.J_ASW] * d * d) * d
+        if jt[i, layout.J_SPRING_DAMPING] != 0.0:  # the damper across the spring
+            ts += jt[i, layout.J_SPRING_DAMPING] * (dq[m] - dq[i])
         rhs[i] += ts
         rhs[m] += tau[i] - ts - jt[i, layout.J_DAMPING] * dq[m]
         if jt[i, layout.J_HAS_FRICTION] != 0.0:
             on_motor = jt[i, layout.J_FRICTION_ON_MOTOR] != 0.0
             k = m if on_motor else i
-            v = dq[k]
-            g = layout.J_G1
-            f = (
-                jt[i, g] * (np.tanh(jt[i, g + 1] * v) - np.tanh(jt[i, g + 2] * v))
-                + jt[i, g + 3] * np.tanh(jt[i, g + 4] * v)
-                + jt[i, g + 5] * v
-            )
-            rhs[k] -= f
+            rhs[k] -= _makkar(jt[i], layout.J_G1, dq[k])
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _makkar(row: F64, g: int, v: float) -> float:  # pragma: no cover - compiled
+    """Makkar's friction law with ``g1..g6`` at ``row[g:g + 6]``, at the rate ``v``."""
+    return (
+        row[g] * (np.tanh(row[g + 1] * v) - np.tanh(row[g + 2] * v))
+        + row[g + 3] * np.tanh(row[g + 4] * v)
+        + row[g + 5] * v
+    )
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def rigid_joint_friction(dq: F64, arrays: ArmArrays, rhs: F64) -> None:  # pragma: no cover
+    """Subtract the rigid joints' friction (:class:`flexarm.model.joints.RigidJoint`,
+    on the joint rates) from ``rhs``; their viscous damping is in ``arrays.damping``."""
+    lk = arrays.link
+    for i in range(lk.shape[0]):
+        if lk[i, ROTOR_FRICTION] != 0.0:
+            rhs[i] -= _makkar(lk[i], ROTOR_G1, dq[i])
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -130,20 +160,37 @@ def assemble_local(q: F64, dq: F64, arrays: ArmArrays, ws: Workspace) -> None:  
                 U[1, r] = -sg * ux + cg * uy
             bx, by = cg * bx + sg * by, -sg * bx + cg * by
             # A[:s] is the angle gradient of link i-1's tip, the carrier of rotor i.
+            jtip = lk[i - 1, TIP_INERTIA]  # link i-1's tip body turns with it
+            if jtip != 0.0:
+                for r in range(s):
+                    ar = jtip * A[r]
+                    for c in range(r + 1):
+                        M[r, c] += ar * A[c]
             if has_joints:
                 m = nq + i
                 jm = jt[i, layout.J_INERTIA]
                 M[m, m] += jm
-                if jt[i, layout.J_COUPLED] != 0.0:
+                cr = jt[i, layout.J_COUPLED]  # 1 / N: rotor rate (carrier rate / N + dq_m)
+                if cr != 0.0:
                     for r in range(s):
-                        ar = jm * A[r]
+                        ar = jm * cr * A[r]
                         M[m, r] += ar
                         for c in range(r + 1):
-                            M[r, c] += ar * A[c]
+                            M[r, c] += ar * cr * A[c]
             # hub mass at the joint, carried by the previous link's tip
             mh = lk[i, HUB_MASS]
             if mh != 0.0:
                 _add_point_mass(mh, s, U, bx, by, M, h)
+        jr = lk[i, ROTOR_INERTIA]  # a rigid joint's rotor: rate carrier rate / N + dtheta_i
+        if jr != 0.0:
+            M[s, s] += jr
+            cr = lk[i, ROTOR_COUPLING]
+            if cr != 0.0:
+                for r in range(s):
+                    ar = jr * cr * A[r]
+                    M[s, r] += ar
+                    for c in range(r + 1):
+                        M[r, c] += ar * cr * A[c]
         ad += dq[i]
         A[s] = 1.0
         U[0, s] = 0.0
@@ -334,6 +381,7 @@ def generalized_forces(
     else:
         for r in range(tau.shape[0]):
             rhs[r] += tau[r]
+        rigid_joint_friction(dq, arrays, rhs)
     gravity_forces(q, arrays, rhs)
 
 

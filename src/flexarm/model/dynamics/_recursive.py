@@ -59,7 +59,10 @@ from ..arrays import (
     INERTIA,
     LEN,
     MASS,
+    ROTOR_COUPLING,
+    ROTOR_INERTIA,
     STATIC,
+    TIP_INERTIA,
     ArmArrays,
     Workspace,
 )
@@ -123,6 +126,7 @@ def accelerations_recursive(
         ch[i, CH_AD] = ad
     # ---- inward: the child's articulated inertia (symmetric) and bias, child frame
     c00 = c01 = c11 = 0.0
+    c02 = c12 = c22 = 0.0  # nonzero only past a rigid joint's rotor
     p0 = p1 = p2 = 0.0
     for i in range(n_links - 1, -1, -1):
         a0, a1 = ms[i], ms[i + 1]
@@ -158,11 +162,15 @@ def accelerations_recursive(
             j00 = cg * t00 - sg * t10 + mh
             j01 = cg * t01 - sg * t11
             j11 = sg * t01 + cg * t11 + mh
+            j02 = cg * c02 - sg * c12
+            j12 = sg * c02 + cg * c12
+            j22 = c22 + lk[i, TIP_INERTIA]  # link i's tip body turns with its tip
             f0 = cg * p0 - sg * p1
             f1 = sg * p0 + cg * p1
             f2 = p2
             if has_joints and jt[i + 1, layout.J_COUPLED] != 0.0:
-                f2 += rhs[nq + i + 1]  # the rotor passes its generalised force on
+                # the rotor passes its generalised force on, times 1 / N
+                f2 += jt[i + 1, layout.J_COUPLED] * rhs[nq + i + 1]
         else:
             mp = arrays.payload[0]
             j00 = mp
@@ -238,12 +246,18 @@ def accelerations_recursive(
             b0 += u0 * zb
             b1 += u1 * zb
             b2 += u2 * zb
-        # ---- eliminate the joint (axis (0, 0, 1)): what the parent sees
-        d = k22
+        # ---- eliminate the joint (axis (0, 0, 1)): what the parent sees. A rigid
+        # joint's rotor J_m turns at cr alpha_p + theta_i' (alpha_p the parent frame's
+        # rate, cr = 1 / N): it adds J_m to the pivot, cr J_m to the joint's coupling
+        # to alpha_p and cr**2 J_m to the parent's angular inertia.
+        jr = lk[i, ROTOR_INERTIA]
+        cr = lk[i, ROTOR_COUPLING]
+        d = k22 + jr
+        iah2 = k22 + cr * jr
         u = rhs[i] - b2
         ch[i, CH_IAH] = k02
         ch[i, CH_IAH + 1] = k12
-        ch[i, CH_IAH + 2] = k22
+        ch[i, CH_IAH + 2] = iah2
         ch[i, CH_D] = d
         ch[i, CH_U] = u
         ch[i, CH_LT] = lt
@@ -255,7 +269,14 @@ def accelerations_recursive(
         c11 = k11 - k12 * k12 / d
         p0 = b0 + k02 * u / d
         p1 = b1 + k12 * u / d
-        p2 = rhs[i]  # b2 + d * u / d: the joint passes its own force on
+        if jr == 0.0:
+            c02 = c12 = c22 = 0.0
+            p2 = rhs[i]  # b2 + d * u / d: the joint passes its own force on
+        else:
+            c02 = k02 - k02 * iah2 / d
+            c12 = k12 - k12 * iah2 / d
+            c22 = k22 + cr * cr * jr - iah2 * iah2 / d
+            p2 = b2 + iah2 * u / d
     # ---- outward: accelerations
     if has_joints:
         ddq[nq] = rhs[nq] / jt[0, layout.J_INERTIA]  # the first rotor's carrier is the base
@@ -283,6 +304,6 @@ def accelerations_recursive(
             m = nq + i + 1
             acc = rhs[m] / jt[i + 1, layout.J_INERTIA]
             if jt[i + 1, layout.J_COUPLED] != 0.0:
-                acc -= tt
+                acc -= jt[i + 1, layout.J_COUPLED] * tt
             ddq[m] = acc
         ax, ay, ath = tx, ty, tt

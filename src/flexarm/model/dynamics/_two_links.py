@@ -18,7 +18,17 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
-from ..arrays import HUB_MASS, INERTIA, LEN, MASS, STATIC, ArmArrays
+from ..arrays import (
+    HUB_MASS,
+    INERTIA,
+    LEN,
+    MASS,
+    ROTOR_FRICTION,
+    ROTOR_INERTIA,
+    STATIC,
+    TIP_INERTIA,
+    ArmArrays,
+)
 from ._gravity import gravity_forces_two_links_one_mode, has_gravity
 
 __all__ = [
@@ -33,17 +43,24 @@ F64 = NDArray[np.float64]
 @nb.njit(cache=True, nogil=True, inline="always")
 def is_two_links_one_mode(arrays: ArmArrays) -> bool:  # pragma: no cover - compiled
     """Whether :func:`forward_dynamics_two_links_one_mode` applies: two links with
-    one mode each (``q = (theta1, theta2, delta1, delta2)``), rigid joints and no
-    geometric stiffening."""
+    one mode each (``q = (theta1, theta2, delta1, delta2)``), rigid joints without
+    rotors or friction (:class:`flexarm.model.joints.RigidJoint`), no tip body on the
+    first link other than a point mass, and no geometric stiffening."""
     ms = arrays.mode_start
-    return bool(
+    if not (
         arrays.joint.shape[0] == 0
         and arrays.shortening_quartic.shape[1] == 0
         and ms.shape[0] == 3
         and ms[0] == 2
         and ms[1] == 3
         and ms[2] == 4
-    )
+    ):
+        return False
+    lk = arrays.link
+    for i in range(2):
+        if lk[i, ROTOR_INERTIA] != 0.0 or lk[i, ROTOR_FRICTION] != 0.0:
+            return False
+    return bool(lk[0, TIP_INERTIA] == 0.0)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
