@@ -32,8 +32,8 @@ from ..control.reflected import ReflectedTipPD
 from ..control.shapers import Shaper, design, for_modes
 from ..control.trajectories import Circle, Line, PointToPoint, Square, Trajectory, Waypoints
 from ..model.arm import FlexibleArm
-from ..model.joints import LinearJoint, MakkarFriction, NonlinearJoint
-from ..model.link import Link
+from ..model.joints import LinearJoint, MakkarFriction, NonlinearJoint, RigidJoint
+from ..model.link import Link, RigidLink
 from ..sensing.delays import (
     SEED_WAVE_SPEED,
     DelayModel,
@@ -47,6 +47,7 @@ from .scenario_schema import (
     CONTROLLERS,
     DELAY_MODELS,
     JOINT_KINDS,
+    LINK_KINDS,
     SECTIONS,
     SENSOR_KINDS,
     SHAPER_MODES,
@@ -85,6 +86,7 @@ _ARM_PASSTHROUGH = (
     "joint_friction",
     "rotor_coupling",
     "geometric_stiffening",
+    "gravity",
 )
 _ARM_KEYS = ("preset", "n_modes", "links", "joints", *_ARM_PASSTHROUGH)
 
@@ -275,7 +277,7 @@ def _arm(r: ScenarioReader, data: Mapping[str, Any]) -> tuple[FlexibleArm, dict[
         with r.library("arm", t):
             arm = FlexibleArm.paper(n_modes=t.get("n_modes", 1), joints=joints, **kwargs)
     else:
-        built = [r.build(Link, lt, f"arm.links[{i}]") for i, lt in enumerate(links)]
+        built = [_link(r, lt, f"arm.links[{i}]") for i, lt in enumerate(links)]
         with r.library("arm", t):
             arm = FlexibleArm(built, joints=joints, **kwargs)
     description = {
@@ -291,9 +293,19 @@ def _arm(r: ScenarioReader, data: Mapping[str, Any]) -> tuple[FlexibleArm, dict[
     return arm, description
 
 
+def _link(r: ScenarioReader, t: Mapping[str, Any], prefix: str) -> Link | RigidLink:
+    """``[[arm.links]]``: a flexible :class:`Link` (``kind = "flexible"``, the default)
+    or a :class:`RigidLink` (``kind = "rigid"``)."""
+    kind = r.kind(t, prefix, LINK_KINDS, default="flexible")
+    return r.build(Link if kind == "flexible" else RigidLink, t, prefix, kind=True)
+
+
 def _joints(
     r: ScenarioReader, arm_table: Mapping[str, Any], n_links: int
-) -> tuple[list[LinearJoint | NonlinearJoint] | None, dict[str, Any] | list[dict[str, Any]]]:
+) -> tuple[
+    list[LinearJoint | NonlinearJoint | RigidJoint] | None,
+    dict[str, Any] | list[dict[str, Any]],
+]:
     """``[arm.joints]`` (the same joint at every link) or ``[[arm.joints]]`` (one table
     per joint, base outwards; all rigid or none)."""
     value = arm_table.get("joints", {})
@@ -317,19 +329,15 @@ def _joints(
 
 def _joint(
     r: ScenarioReader, t: dict[str, Any], prefix: str
-) -> tuple[LinearJoint | NonlinearJoint | None, dict[str, Any]]:
+) -> tuple[LinearJoint | NonlinearJoint | RigidJoint | None, dict[str, Any]]:
     kind = r.kind(t, "arm.joints", JOINT_KINDS)
+    if kind == "rigid" and set(t) <= {"kind"}:
+        return None, {"kind": "rigid"}  # an ideal rigid joint: no motor dynamics
+    base: LinearJoint | NonlinearJoint | RigidJoint
     if kind == "rigid":
-        for key in t:
-            if key != "kind":
-                r.fail(
-                    f"{prefix}.{key}",
-                    f"unknown key '{prefix}.{key}' (rigid joints take no parameters)",
-                    show_key=False,
-                )
-        return None, {"kind": "rigid"}
-    base: LinearJoint | NonlinearJoint
-    base = LinearJoint.default() if kind == "linear" else NonlinearJoint.default()
+        base = RigidJoint()
+    else:
+        base = LinearJoint.default() if kind == "linear" else NonlinearJoint.default()
     allowed = tuple(f.name for f in dataclasses.fields(base))
     params = {k: v for k, v in t.items() if k != "kind"}
     r.keys(params, prefix, allowed, type(base).__name__)

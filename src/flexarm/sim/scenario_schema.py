@@ -21,17 +21,25 @@ builds, with the same names and SI units::
     payload_mass = 0.0        # kg
     payload_inertia = 0.0     # kg m^2
     # also: mode_normalization, mode_amplitude, joint_friction, rotor_coupling,
-    # geometric_stiffening (false for the preset, true with [[arm.links]])
+    # geometric_stiffening (false for the preset, true with [[arm.links]]),
+    # gravity = [0.0, -9.81]  # m/s^2 in the plane of motion (default: none)
 
     # [[arm.links]]           # one table per link, base outwards (Link)
     # length = 4.5            # m            (required)
     # flexural_rigidity = 1676.0   # N m^2   (required)
     # linear_density = 0.335  # kg/m         (required)
-    # n_modes = 3, hub_mass = 0.0 (kg), hub_inertia = 0.0 (kg m^2), modal_damping = 0.0
+    # n_modes = 3, hub_mass = 0.0 (kg), hub_inertia = 0.0 (kg m^2), modal_damping = 0.0,
+    # tip_mass = 0.0 (kg), tip_inertia = 0.0 (kg m^2): a body at the tip turning with it
+    # kind = "rigid"          # a RigidLink instead: length, mass (kg), com (m from the
+    #                         # joint), inertia (kg m^2 about the centre of mass), and
+    #                         # hub_mass, hub_inertia, tip_mass, tip_inertia
 
     # [arm.joints]            # the same joint at every link (default: rigid joints)
     # kind = "linear"         # "rigid" | "linear" (LinearJoint.default()) |
     #                         # "nonlinear" (NonlinearJoint.default(MakkarFriction.default()))
+    # motor_inertia, damping, gear_ratio, friction    (rigid: a RigidJoint; no keys:
+    #                                                   ideal rigid joints)
+    # damping (across the spring), gear_ratio, friction_side    (linear and nonlinear)
     # stiffness, motor_inertia, motor_damping          (linear overrides)
     # a1, a2, ksw, asw, motor_inertia, motor_damping   (nonlinear overrides)
     # friction = true | false | { g1 = ..., ..., g6 = ... }
@@ -145,6 +153,7 @@ __all__ = [
     "CONTROLLERS",
     "DELAY_MODELS",
     "JOINT_KINDS",
+    "LINK_KINDS",
     "NOISE_KEYS",
     "SECTIONS",
     "SENSOR_KINDS",
@@ -164,6 +173,7 @@ CONTROLLERS = ("pd", "jt-pd", "joint-pd", "fuzzy", "lqg", "reflected")
 SHAPERS = ("none", "zv", "zvd", "ei")
 SHAPER_MODES = ("first", "all")
 JOINT_KINDS = ("rigid", "linear", "nonlinear")
+LINK_KINDS = ("flexible", "rigid")
 DELAY_MODELS = ("seed", "dispersive")
 NOISE_KEYS = ("noise_std", "rate_noise_std", "quantization", "rate_quantization")
 
