@@ -521,3 +521,14 @@ def test_linearisation_about_the_posture_is_the_jacobian_of_the_dynamics(name):
         down = arm.forward_dynamics(eq.q, zero, eq.torques - e)
         bcols.append((up - down) / (2 * h))
     np.testing.assert_allclose(sys.B[n:], np.array(bcols).T, rtol=1e-6, atol=1e-9)
+
+
+def test_a_scenario_file_sets_gravity():
+    from flexarm.errors import ScenarioError
+    from flexarm.sim.scenario import arm_from_tables
+
+    arm = arm_from_tables({"arm": {"gravity": [0.0, -9.81]}})
+    assert arm.gravity == (0.0, -9.81)
+    assert arm_from_tables({"arm": {}}).gravity is None
+    with pytest.raises(ScenarioError, match=r"arm\.gravity"):
+        arm_from_tables({"arm": {"gravity": [0.0]}})

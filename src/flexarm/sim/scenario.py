@@ -85,6 +85,7 @@ _ARM_PASSTHROUGH = (
     "joint_friction",
     "rotor_coupling",
     "geometric_stiffening",
+    "gravity",
 )
 _ARM_KEYS = ("preset", "n_modes", "links", "joints", *_ARM_PASSTHROUGH)
 
@@ -288,6 +289,8 @@ def _arm(r: ScenarioReader, data: Mapping[str, Any]) -> tuple[FlexibleArm, dict[
         "joints": joints_d,
         "link_frequencies_rad_s": [f.tolist() for f in arm.link_frequencies],
     }
+    if arm.gravity is not None:
+        description["gravity"] = list(arm.gravity)
     return arm, description
 
 
