@@ -1,4 +1,5 @@
-r"""The arm at rest under gravity: :func:`equilibrium` and its :class:`Equilibrium`.
+r"""The arm at rest under gravity: :func:`~flexarm.model.statics.equilibrium` and its
+:class:`~flexarm.model.statics.Equilibrium`.
 
 Holding joint angles ``theta`` (the link-side angles) against gravity
 (:mod:`flexarm.model.gravity`), the arm comes to rest where every generalised
