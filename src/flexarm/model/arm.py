@@ -584,6 +584,13 @@ class FlexibleArm(Backends, RigidKinematics):
         ndarray
             Increasing frequencies in rad/s: one per elastic degree of freedom
             (modal coordinates, plus joint springs).
+
+        Notes
+        -----
+        The stiffness is the elastic one alone; with gravity, the frequencies
+        about a posture that carries its weight (gravity's stiffening of a
+        hanging link, softening of a standing one) are
+        ``equilibrium(theta).frequencies``.
         """
         check_option(joints, "joints", _OWNER, ("locked", "free"))
         q = np.zeros(self.n_dof) if q is None else self._check_q(q)

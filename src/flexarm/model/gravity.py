@@ -13,7 +13,7 @@ fixed base) and ``o_N`` the last tip (the payload). Motors have no mass of their
 own in the model: a rotor's mass belongs in its hub's ``hub_mass``.
 
 Written per link, in its frame at absolute angle ``alpha_i``
-(:mod:`flexarm.model.dynamics._gravity` has the same sums compiled):
+(the internal ``flexarm.model.dynamics._gravity`` has the same sums compiled):
 ``V = -sum_i (R(alpha_i)' g) . b_i`` with the link's first moment about its
 joint plus the mass its tip carries,
 

@@ -1,4 +1,5 @@
-r"""The arm at rest under gravity: :func:`equilibrium` and its :class:`Equilibrium`.
+r"""The arm at rest under gravity: :func:`~flexarm.model.statics.equilibrium` and its
+:class:`~flexarm.model.statics.Equilibrium`.
 
 Holding joint angles ``theta`` (the link-side angles) against gravity
 (:mod:`flexarm.model.gravity`), the arm comes to rest where every generalised
@@ -119,7 +120,8 @@ def equilibrium(
         (default); False returns it flagged ``stable=False``.
     tol : float
         Newton's method stops when a step changes no modal coordinate by more
-        than ``tol`` times (1 + the largest of them).
+        than ``tol`` times (1 + the largest of them), or when the forces left
+        are below ``tol`` times the elastic and gravity forces that balance.
     max_iter : int
         Newton steps at the most.
 
@@ -148,8 +150,13 @@ def equilibrium(
     modal[n_links : int(arm.arrays.mode_start[-1])] = True
     zero_rate, zero_tau = np.zeros(n), np.zeros(n_links)
     k_modal = np.diag(arm.arrays.stiffness)[np.ix_(modal, modal)]
-    for _ in range(max_iter if modal.any() else 0):
+    k_diag = np.diag(k_modal)
+    for it in range(max_iter if modal.any() else 0):
         r = arm.generalized_forces(q, zero_rate, zero_tau)[modal]
+        elastic = k_diag * q[modal]
+        load = np.max(np.abs(elastic)) + np.max(np.abs(r + elastic))  # the forces that balance
+        if it > 0 and np.max(np.abs(r)) <= tol * load:
+            break  # converged in force (also where the stiffness is nearly singular)
         jac = k_modal + gravity_stiffness(arm, q)[np.ix_(modal, modal)]
         step = np.linalg.solve(jac, r)
         q[modal] += step

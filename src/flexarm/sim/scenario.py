@@ -290,6 +290,8 @@ def _arm(r: ScenarioReader, data: Mapping[str, Any]) -> tuple[FlexibleArm, dict[
         "joints": joints_d,
         "link_frequencies_rad_s": [f.tolist() for f in arm.link_frequencies],
     }
+    if arm.gravity is not None:
+        description["gravity"] = list(arm.gravity)
     return arm, description
 
 

@@ -22,7 +22,7 @@ builds, with the same names and SI units::
     payload_inertia = 0.0     # kg m^2
     # also: mode_normalization, mode_amplitude, joint_friction, rotor_coupling,
     # geometric_stiffening (false for the preset, true with [[arm.links]]),
-    # gravity = [0.0, -9.81]  # m/s^2 in the plane of motion (default: none)
+    # gravity = [0.0, -9.81] (m/s^2, base frame; default none: a horizontal plane)
 
     # [[arm.links]]           # one table per link, base outwards (Link)
     # length = 4.5            # m            (required)

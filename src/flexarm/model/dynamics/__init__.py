@@ -95,7 +95,8 @@ def local_order(mode_start: NDArray[np.int64], n_dof: int) -> NDArray[np.int64]:
 # would otherwise be written past its end); inside compiled code (the simulator's
 # loops, a user's own) the same name is the bare kernel itself, through an overload.
 def forward_dynamics(q: F64, dq: F64, tau: F64, model: ArmArrays, ws: Workspace, ddq: F64) -> None:
-    """``ddq = M(q)^-1 (B tau - C(q, dq) dq - K q - D dq + joint forces)``, into ``ddq``.
+    """``ddq = M(q)^-1 (B tau - C(q, dq) dq - K q - D dq + joint forces - dV/dq)``
+    into ``ddq`` (``V`` the gravity potential, :mod:`flexarm.model.gravity`; none without).
 
     Two links with one mode each and rigid joints (the paper's structure) take the
     scalar kernel (:func:`forward_dynamics_two_links_one_mode`), every other arm

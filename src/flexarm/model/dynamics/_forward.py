@@ -67,7 +67,8 @@ def forward_dynamics_general(
 def forward_dynamics(
     q: F64, dq: F64, tau: F64, arrays: ArmArrays, ws: Workspace, ddq: F64
 ) -> None:  # pragma: no cover - compiled
-    """``ddq = M(q)^-1 (B tau - C(q, dq) dq - K q - D dq + joint forces)``, into ``ddq``.
+    """``ddq = M(q)^-1 (B tau - C(q, dq) dq - K q - D dq + joint forces - dV/dq)``
+    into ``ddq`` (``V`` the gravity potential, :mod:`flexarm.model.gravity`; none without).
 
     Two links with one mode each and rigid joints (the paper's structure) take
     the scalar kernel :func:`forward_dynamics_two_links_one_mode`, which
