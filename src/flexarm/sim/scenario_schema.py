@@ -27,13 +27,16 @@ builds, with the same names and SI units::
     # length = 4.5            # m            (required)
     # flexural_rigidity = 1676.0   # N m^2   (required)
     # linear_density = 0.335  # kg/m         (required)
-    # n_modes = 3, hub_mass = 0.0 (kg), hub_inertia = 0.0 (kg m^2), modal_damping = 0.0
+    # n_modes = 3, hub_mass = 0.0 (kg), hub_inertia = 0.0 (kg m^2), modal_damping = 0.0,
+    # tip_mass = 0.0 (kg), tip_inertia = 0.0 (kg m^2: a body at the tip)
 
     # [arm.joints]            # the same joint at every link (default: rigid joints)
     # kind = "linear"         # "rigid" | "linear" (LinearJoint.default()) |
     #                         # "nonlinear" (NonlinearJoint.default(MakkarFriction.default()))
     # stiffness, motor_inertia, motor_damping          (linear overrides)
     # a1, a2, ksw, asw, motor_inertia, motor_damping   (nonlinear overrides)
+    # gear_ratio (default 100), damping (across the spring, N m s/rad),
+    # friction_side = "link" | "motor"                  (either kind)
     # friction = true | false | { g1 = ..., ..., g6 = ... }
     #   true: MakkarFriction.default(); a table overrides some of its g's;
     #   default: false for "linear", true for "nonlinear"
