@@ -414,6 +414,26 @@ def test_a_rigid_joint_is_the_limit_of_stiff_geared_joints():
     assert errors[2] < 1e-3 * np.abs(ref).max()
 
 
+def test_a_prescribed_rigid_joint_needs_the_torque_of_its_rotor_and_friction():
+    """Prescribed motion on a RigidJoint: the servo torque is (I + J_m) theta'' + c theta'
+    + f(theta'), by hand, in the compiled kernel and the NumPy reference."""
+    from flexarm.model.prescribed import prescribed_accelerations, prescribed_dynamics
+
+    g = (0.3, 50.0, 5.0, 0.7, 40.0, 0.2)
+    jm, c = 0.15, 0.3
+    arm = one_link_on_a_joint(fa.RigidJoint(jm, damping=c, friction=MakkarFriction(*g)))
+    inertia = 2.0 * 1.2**3 / 3 + 0.1
+    v, acc = 0.4, 1.7
+    f = g[0] * (math.tanh(g[1] * v) - math.tanh(g[2] * v)) + g[3] * math.tanh(g[4] * v) + g[5] * v
+    expected = (inertia + jm) * acc + c * v + f
+    q, dq, a = np.array([0.2]), np.array([v]), np.array([acc])
+    _, tau = prescribed_accelerations(arm, q, dq, a)
+    assert float(tau[0]) == pytest.approx(expected, rel=1e-13)
+    ddq, tau_c = np.empty(1), np.empty(1)
+    prescribed_dynamics(q, dq, a, arm.arrays, make_workspace(1), ddq, tau_c)
+    assert float(tau_c[0]) == pytest.approx(expected, rel=1e-13)
+
+
 def test_an_arm_mixing_rigid_and_flexible_joints_is_refused():
     links = [fa.Link(1.0, 1.0, 1.0, n_modes=0)] * 2
     with pytest.raises(

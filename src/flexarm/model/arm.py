@@ -515,7 +515,7 @@ class FlexibleArm(Backends, RigidKinematics):
                     out[i] -= jt.friction(dq[i])
             return out  # type: ignore[no-any-return]
         m0 = self.motor_slice.start
-        for i, jt in enumerate(self.joints):
+        for i, jt in enumerate(self._springs):
             m = m0 + i
             ts = jt.torque(q[m] - q[i]) + jt.damping * (dq[m] - dq[i])
             out[i] += ts

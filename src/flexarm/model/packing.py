@@ -125,7 +125,9 @@ def pack(arm: PackableArm) -> ArmArrays:
         md[s, s] = bm.modal_mass
         k[s] = np.diag(bm.modal_stiffness)
         d[s] = 2.0 * lk.modal_damping * bm.frequencies * np.diag(bm.generalized_mass)
-    springs = () if rigid_joints else arm.joints or ()
+    springs: Sequence[LinearJoint | NonlinearJoint] = (
+        () if rigid_joints else arm.joints or ()  # type: ignore[assignment]
+    )
     joint = np.zeros((len(springs), N_JOINT_COLUMNS))
     for i, jt in enumerate(springs):
         row = joint[i]

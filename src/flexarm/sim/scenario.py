@@ -497,8 +497,9 @@ def _delay(
         else:
             first = arm.links[0]
             freqs = arm.link_frequencies[0]
-            if len(freqs) == 0:
+            if len(freqs) == 0 or not isinstance(first, Link):
                 r.fail("delay.delay", "'dispersive' needs a first link with at least one mode")
+            assert isinstance(first, Link)
             w1, ei, rho = float(freqs[0]), first.flexural_rigidity, first.linear_density
             speed = bending_group_speed(w1, ei, rho)
             seconds = travel_delay(

@@ -39,9 +39,10 @@ builds, with the same names and SI units::
     #                         # "nonlinear" (NonlinearJoint.default(MakkarFriction.default()))
     # motor_inertia, damping, gear_ratio, friction    (rigid: a RigidJoint; no keys:
     #                                                   ideal rigid joints)
-    # damping (across the spring), gear_ratio, friction_side    (linear and nonlinear)
     # stiffness, motor_inertia, motor_damping          (linear overrides)
     # a1, a2, ksw, asw, motor_inertia, motor_damping   (nonlinear overrides)
+    # gear_ratio (default 100), damping (across the spring, N m s/rad),
+    # friction_side = "link" | "motor"                  (either kind)
     # friction = true | false | { g1 = ..., ..., g6 = ... }
     #   true: MakkarFriction.default(); a table overrides some of its g's;
     #   default: false for "linear", true for "nonlinear"

@@ -81,11 +81,12 @@ def joint_forces(
 @nb.njit(cache=True, nogil=True, inline="always")
 def _makkar(row: F64, g: int, v: float) -> float:  # pragma: no cover - compiled
     """Makkar's friction law with ``g1..g6`` at ``row[g:g + 6]``, at the rate ``v``."""
-    return (
+    f: float = (
         row[g] * (np.tanh(row[g + 1] * v) - np.tanh(row[g + 2] * v))
         + row[g + 3] * np.tanh(row[g + 4] * v)
         + row[g + 5] * v
     )
+    return f
 
 
 @nb.njit(cache=True, nogil=True, inline="always")

@@ -30,8 +30,12 @@ force to its carrier) and, after the last link, the payload, it adds
 ``G' I G`` and ``G' p`` (``G = [T_i, E_i]``) to link ``i``'s
 ``(3 + m) x (3 + m)`` system ``K``, ``k``. Eliminating the link's ``m`` modes
 (an ``L D L'`` factorisation of ``K``'s modal block) and then its joint leaves
-``I_i``, ``p_i``. Outward, from the base: the joint acceleration, then the modal
-accelerations, then the next frame's motion, then the rotors'.
+``I_i``, ``p_i`` (a rigid joint's rotor, turning at ``alpha_p / N + theta_i'``
+with ``alpha_p`` the parent frame's rate, joins that elimination: it adds ``J_m``
+to the pivot, ``J_m / N`` to the joint's coupling with ``alpha_p`` and
+``J_m / N**2`` to ``I_i``'s angular entry, which is then not zero). Outward,
+from the base: the joint acceleration, then the modal accelerations, then the
+next frame's motion, then the rotors'.
 """
 
 from __future__ import annotations
