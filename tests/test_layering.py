@@ -78,6 +78,7 @@ WITHIN: dict[str, list[str]] = {
     "control": [
         "options",
         "signals",
+        "gravity_compensation",
         "_piecewise",
         "_path_kernels",
         "_gains",

@@ -199,6 +199,11 @@ class Controller:
     feedforward = False
     """Whether :func:`flexarm.simulate` adds the reference's rigid feedforward torques to
     this law's output by default (its ``feedforward=None``)."""
+    gravity_compensation = True
+    """Whether :func:`flexarm.simulate` adds the holding torques of the measured posture
+    (:mod:`flexarm.control.gravity_compensation`) to this law's output by default when
+    the arm has gravity (its ``gravity_compensation=None``): the built-in laws are
+    designed for the arm without its weight."""
 
     def reference_smoothing(
         self,
@@ -468,6 +473,7 @@ class CompiledController(Controller):
     params: ArrayLike = ()
     state: ArrayLike = ()
     name: str = "compiled"
+    gravity_compensation = False  # your law's torque is all it commands, unless asked
     _cfunc: list[CFunc] = field(default_factory=list, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:

@@ -162,6 +162,7 @@ def simulate(
         "record_signals": s.record_signals,
         "method": s.method,
         "feedforward": setup.feedforward,
+        "gravity_compensation": setup.gravity_compensation,
         "smoothing_s": setup.smoothing,
         "reference_chosen_by": "user" if s.smoothing is not None else "controller",
         "duration_s": setup.loop.n_steps * s.dt,
@@ -205,6 +206,7 @@ class _Setup(NamedTuple):
     whole: tuple[F64, F64] | None  # the whole reference (short runs, the SciPy loop)
     kept: NDArray[np.int64]  # the recorded instants
     feedforward: bool
+    gravity_compensation: bool
     smoothing: float  # s, the smoothing of the path used (the settings' or the law's)
     method: str
     n_rows: int
@@ -215,6 +217,10 @@ def _set_up(
 ) -> _Setup:
     """Everything of a run that depends on the arm: checked, computed, allocated once."""
     use_ff = bool(controller.feedforward) if s.feedforward is None else s.feedforward
+    use_gc = bool(controller.gravity_compensation)
+    if s.gravity_compensation is not None:
+        use_gc = s.gravity_compensation
+    use_gc = use_gc and getattr(arm, "gravity", None) is not None  # (nothing to hold without)
     N, n = arm.n_links, arm.n_dof
     duration = float(trajectory.duration) if s.duration is None else s.duration
     n_steps = round(duration / s.dt)
@@ -310,6 +316,7 @@ def _set_up(
         reference=recorded_reference,  # type: ignore[arg-type]
         recorded=kept.shape[0],
         record_signals=s.record_signals,
+        gravity_compensation=use_gc,
     )
     if s.check_sampling and isinstance(arm, FlexibleArm):
         from ..control.sampling import check_sampling as check
@@ -336,6 +343,7 @@ def _set_up(
         whole=whole,
         kept=kept,
         feedforward=use_ff,
+        gravity_compensation=use_gc,
         smoothing=smoothing,
         method=s.method,
         n_rows=n_rows,

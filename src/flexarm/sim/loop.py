@@ -24,6 +24,7 @@ from numba.core.ccallback import CFunc
 from numpy.typing import NDArray
 
 from .._compile import njit_runtime_free
+from ..control.gravity_compensation import holding_torques, scratch_size
 from ..control.signals import (
     measurement_size,
     r_feedforward,
@@ -77,6 +78,7 @@ class LoopState(NamedTuple):
     signals: F64  # (2 n_ch + n_y + max(p, 1),) signal scratch
     reference: F64  # (reference_size,) a streamed reference vector (feedforward 0)
     desired: F64  # (2,) a streamed desired point
+    gravity: F64  # (2 n + N,) gravity compensation: its scratch, then its torques; (0,): off
 
 
 class LoopOutputs(NamedTuple):
@@ -160,6 +162,7 @@ def loop_inputs(
     reference: tuple[F64, F64] | None,
     recorded: int,
     record_signals: bool = True,
+    gravity_compensation: bool = False,
 ) -> Loop:
     """The one way to build a :class:`Loop`: the state at ``q, dq`` (copied) with the
     controller's initial state and the delay line at steady state, and output rows
@@ -171,6 +174,8 @@ def loop_inputs(
     caller writes them). ``record_signals=False`` records neither the measurement
     nor the reference (``y`` and ``r`` get no rows; ``reference``'s rows are not
     kept); the desired points are recorded all the same.
+    ``gravity_compensation`` adds to the law's torque the holding torques of the
+    measured posture (:mod:`flexarm.control.gravity_compensation`).
     """
     n, n_links = q.shape[0], model.link.shape[0]
     n_y = measurement_size(n_links, int(model.mode_start[n_links]) - n_links)
@@ -189,6 +194,7 @@ def loop_inputs(
         signals=np.zeros(2 * n_ch + n_y + max(order, 1)),
         reference=np.zeros(reference_size(n_links)),
         desired=np.zeros(2),
+        gravity=np.zeros(scratch_size(n, n_links) + n_links if gravity_compensation else 0),
     )
     _channels.prime(
         state.q, state.dq, model, sensor, state.buffer, state.pade_x, state.signals[:n_ch]
@@ -279,6 +285,9 @@ def _run(
     record_r = out.r.shape[0] > 0
     last_link = n_links - 1
     tip_distance = model.link[last_link, LEN]
+    compensate = state.gravity.shape[0] > 0
+    hold_scratch = state.gravity[: state.gravity.shape[0] - n_links]
+    hold = state.gravity[state.gravity.shape[0] - n_links :]
     for k in range(k0, k1):
         if streamed:
             code, _ = stream_row(loop.stream, k * dt, state.reference, state.desired)
@@ -349,6 +358,10 @@ def _run(
             tau.ctypes,
             n_links,
         )
+        if compensate:  # the holding torques of the measured posture
+            holding_torques(y[o_angle : o_angle + n_links], model, hold_scratch, hold)
+            for i in range(n_links):
+                tau[i] += hold[i]
         for i in range(n_links):
             tau[i] += rk[o_ff + i]  # feedforward (zero unless asked for)
             lim = loop.torque_limit[i]
@@ -441,6 +454,9 @@ def run(
         state.reference, "state.reference", owner, (reference_size(n_links),), writable=True
     )
     check_vector(state.desired, "state.desired", owner, (2,), writable=True)
+    off = np.size(state.gravity) == 0  # no gravity compensation
+    n_hold = 0 if off else scratch_size(n, n_links) + n_links
+    check_vector(state.gravity, "state.gravity", owner, (n_hold,), writable=True)
     last = min(k1, n_steps + 1) - 1  # the last instant the chunk may record
     rows = (last + every - 1) // every + 1 if last >= k0 else 0
     for name, arr, width in (

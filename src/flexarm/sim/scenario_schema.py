@@ -105,6 +105,8 @@ builds, with the same names and SI units::
     #                         # default: what the controller asks for; 0: the raw path)
     # record_signals = true   # record the measurement and the reference (false: no columns)
     # feedforward = true      # rigid inverse dynamics (default: the controller's choice)
+    # gravity_compensation = true  # with [arm] gravity: add the holding torques of the
+    #                         # measured posture (default: the controller's choice)
     # check_sampling = true   # refuse a period beyond the sampled loop's bound
     # record_every = 1        # record every k-th control instant (and the last)
 

@@ -86,6 +86,14 @@ class SimulationSettings:
         Add the rigid inverse dynamics of the joint references to the law's
         torque (two-link arms). None: what the law asks for
         (``controller.feedforward``).
+    gravity_compensation : bool, optional
+        With an arm in a vertical plane (``FlexibleArm(gravity=...)``), add to the
+        law's torque at every control instant the joint torques that hold the
+        measured posture at rest, its links' sag included
+        (:mod:`flexarm.control.gravity_compensation`), so that a law designed for
+        the horizontal arm tracks as it does there. None: what the law asks for
+        (``controller.gravity_compensation``: on for the built-in laws, off for
+        your own). Nothing to add without gravity.
     smoothing : float, optional
         Standard deviation (s) of a zero-phase Gaussian smoothing of the path fed
         to the law (>= 0; 0: none, the raw path): the reference is known in
@@ -137,6 +145,7 @@ class SimulationSettings:
     method: str = "rk4"
     seed: int | None = None
     feedforward: bool | None = None
+    gravity_compensation: bool | None = None
     smoothing: float | None = None
     check_sampling: bool = True
     record_every: int = 1
@@ -152,6 +161,7 @@ class SimulationSettings:
         "max_deflection",
         "smoothing",
         "feedforward",
+        "gravity_compensation",
         "check_sampling",
         "record_every",
         "record_signals",
@@ -200,6 +210,7 @@ class SimulationSettings:
         if self.seed is not None:
             set_(self, "seed", check_int(self.seed, "seed", _OWNER, minimum=0))
         check_bool(self.feedforward, "feedforward", _OWNER, optional=True)
+        check_bool(self.gravity_compensation, "gravity_compensation", _OWNER, optional=True)
         if self.smoothing is not None:
             value = check_real(self.smoothing, "smoothing", _OWNER, nonnegative=True)
             set_(self, "smoothing", value)
