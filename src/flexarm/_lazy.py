@@ -6,19 +6,21 @@ public names and subpackages are imported on first access
 
 A package lists its public names once, as what type checkers see::
 
-    __getattr__, __dir__, __all__ = attach(__name__, ("sensors",))
+    __getattr__, __dir__, __all__ = attach(__name__)
 
     if TYPE_CHECKING:
         from .sensors import TipSensor as TipSensor
 
 and :func:`attach` reads that block of the package's source for the names and
-the modules that define them.
+the modules that define them; its public modules (no leading underscore) are its
+attributes too, or those it names.
 """
 
 from __future__ import annotations
 
 import ast
 import importlib
+import pkgutil
 import sys
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -52,7 +54,9 @@ def declared_names(source: str, package: str) -> dict[str, str]:
 
 
 def attach(
-    package: str, submodules: Sequence[str], names: Mapping[str, str] | None = None
+    package: str,
+    submodules: Sequence[str] | None = None,
+    names: Mapping[str, str] | None = None,
 ) -> tuple[Callable[[str], object], Callable[[], list[str]], list[str]]:
     """``(__getattr__, __dir__, __all__)`` for ``package``.
 
@@ -60,18 +64,23 @@ def attach(
     ----------
     package : str
         The package's ``__name__``.
-    submodules : sequence of str
-        Subpackages and modules reachable as attributes (``flexarm.ident``).
+    submodules : sequence of str, optional
+        Subpackages and modules reachable as attributes (``flexarm.ident``); by
+        default every module and subpackage of ``package`` whose name has no
+        leading underscore.
     names : mapping of str to str, optional
         Public name -> the module (relative to ``package``) that defines it; by
         default those of the package's ``if TYPE_CHECKING:`` block
         (:func:`declared_names`).
     """
+    pkg = sys.modules[package]
     if names is None:
-        init = sys.modules[package].__file__
-        if init is None:  # pragma: no cover - a namespace package has no __init__
+        if pkg.__file__ is None:  # pragma: no cover - a namespace package has no __init__
             raise ImportError(f"{package} has no __init__ to read its names from")
-        names = declared_names(Path(init).read_text(encoding="utf-8"), package)
+        names = declared_names(Path(pkg.__file__).read_text(encoding="utf-8"), package)
+    if submodules is None:
+        found = pkgutil.iter_modules(pkg.__path__)
+        submodules = [info.name for info in found if not info.name.startswith("_")]
     subs = frozenset(submodules)
     public = sorted({*subs, *names})
     defined = dict(names)

@@ -19,9 +19,7 @@ from typing import TYPE_CHECKING
 
 from .._lazy import attach
 
-_SUBMODULES = ("config", "fit", "model", "records", "result", "units")
-
-__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES)
+__getattr__, __dir__, __all__ = attach(__name__)
 
 if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
     from .config import CalibrationConfig as CalibrationConfig

@@ -35,9 +35,7 @@ from typing import TYPE_CHECKING
 
 from .._lazy import attach
 
-_SUBMODULES = ("data", "fits", "hammerstein", "options", "regression")
-
-__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES)
+__getattr__, __dir__, __all__ = attach(__name__)
 
 if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
     from ._estimator import NotFittedError as NotFittedError

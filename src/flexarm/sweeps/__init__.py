@@ -20,20 +20,7 @@ from typing import TYPE_CHECKING
 
 from .._lazy import attach
 
-_SUBMODULES = (
-    "cluster",
-    "distributions",
-    "driver",
-    "execute",
-    "journal",
-    "keys",
-    "reader",
-    "records",
-    "spec",
-    "table",
-)
-
-__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES)
+__getattr__, __dir__, __all__ = attach(__name__)
 
 if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
     from .cluster import ClusterError as ClusterError

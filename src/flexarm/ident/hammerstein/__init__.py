@@ -29,21 +29,7 @@ from typing import TYPE_CHECKING
 
 from ..._lazy import attach
 
-_SUBMODULES = (
-    "bootstrap",
-    "comparison",
-    "correlated",
-    "identifier",
-    "linear",
-    "prediction",
-    "report",
-    "solution",
-    "systems",
-    "white",
-    "whiteness",
-)
-
-__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES)
+__getattr__, __dir__, __all__ = attach(__name__)
 
 if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
     from .bootstrap import Bands as Bands

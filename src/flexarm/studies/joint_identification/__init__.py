@@ -98,9 +98,7 @@ from typing import TYPE_CHECKING
 
 from ..._lazy import attach
 
-_SUBMODULES = ("design", "estimation", "experiment", "parameters", "result", "study")
-
-__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES)
+__getattr__, __dir__, __all__ = attach(__name__)
 
 if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
     from .design import DeadBandDesign as DeadBandDesign
