@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._types import F64
 from .._validation import check_array, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 
@@ -25,7 +26,6 @@ if TYPE_CHECKING:
 
 __all__ = ["StateSpace"]
 
-F64 = NDArray[np.float64]
 C128 = NDArray[np.complex128]
 _OWNER = "StateSpace"
 

@@ -31,8 +31,8 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._types import F64
 from .._validation import check_array, check_int, check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arm import FlexibleArm
@@ -48,7 +48,6 @@ __all__ = [
     "measure",
 ]
 
-F64 = NDArray[np.float64]
 GAUGE_FORMS = ("strain", "tip_angle")
 """What a strain gauge reports: the strain, or the vendor's tip-angle form of it."""
 

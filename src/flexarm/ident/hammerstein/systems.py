@@ -27,6 +27,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..._types import F64
 from ..._validation import check_array, check_real, check_rng, validate_real_fields
 from ...errors import InvalidTypeError, InvalidValueError
 
@@ -44,8 +45,6 @@ __all__ = [
     "simulate_hammerstein",
     "spectral_radius",
 ]
-
-F64 = NDArray[np.float64]
 
 
 class Nonlinearity(Protocol):

@@ -38,8 +38,9 @@ from collections.abc import Callable
 
 import numba as nb
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from ..._types import F64
 from ..._validation import check_array, check_option
 from ...errors import InvalidValueError
 from ..options import KERNELS
@@ -60,7 +61,6 @@ __all__ = [
     "support_radius",
 ]
 
-F64 = NDArray[np.float64]
 
 #: A user kernel: ``u`` of shape ``(m, d)`` in, weights of shape ``(m,)`` out.
 KernelFunction = Callable[[F64], ArrayLike]

@@ -8,14 +8,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from ..._types import F64
 from ..._validation import validate_real_fields
 from ...errors import InvalidTypeError, InvalidValueError
 
 __all__ = ["DriveNonlinearity", "JointExcitation", "JointSensors"]
-
-F64 = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -20,6 +20,7 @@ from typing import Any, ClassVar, Self
 import numpy as np
 from numpy.typing import NDArray
 
+from ...._types import F64, I64
 from ....errors import InvalidValueError
 from ..kernels import KernelFunction
 from . import _loops
@@ -34,8 +35,6 @@ __all__ = [
     "State",
 ]
 
-F64 = NDArray[np.float64]
-I64 = NDArray[np.int64]
 #: An accumulator's state: plain arrays by name (``.npz``-ready, no pickle).
 State = dict[str, NDArray[Any]]
 
