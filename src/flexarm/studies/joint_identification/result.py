@@ -13,11 +13,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
 
 from ..._io import JSONValue, atomic_path
+from ..._types import F64
 from ...figures import DOUBLE_COLUMN, FigureFormat, new_figure, save_figure, styled
-from ...ident._output import output_directory
+from ...ident._output import output_directory, save_docstring
 from .parameters import DriveNonlinearity
 
 if TYPE_CHECKING:
@@ -27,7 +27,6 @@ if TYPE_CHECKING:
 
 __all__ = ["SAVED_FILES", "CurveEstimate", "JointIdentification", "saved_files"]
 
-F64 = NDArray[np.float64]
 SAVED_FILES = ("summary.json", "curves.npz", "identify_joint.png")
 """What :meth:`JointIdentification.save` writes (the figure as PNG, the default)."""
 _FIGURE_SIZE = (DOUBLE_COLUMN, 5.0)  # inches: two columns of a paper
@@ -154,29 +153,18 @@ class JointIdentification:
             "info": dict(self.info),
         }
 
+    @save_docstring(
+        "``summary.json``, ``curves.npz`` and ``identify_joint.png``",
+        "identify_joint",
+        note="The figure is drawn off screen (no pyplot, no change of backend).",
+        returns=" (:func:`saved_files`)",
+    )
     def save(
         self,
         directory: str | os.PathLike[str],
         *,
         figure_format: FigureFormat | str | None = None,
     ) -> list[Path]:
-        """Write ``summary.json``, ``curves.npz`` and ``identify_joint.png`` into ``directory``.
-
-        Each file is written atomically; the directory is created if needed.
-        The figure is drawn off screen (no pyplot, no change of backend).
-
-        Parameters
-        ----------
-        directory : str or path-like
-        figure_format : FigureFormat or str, optional
-            The figure's format and resolution (default PNG,
-            :class:`flexarm.figures.FigureFormat`): ``identify_joint.pdf`` with ``"pdf"``.
-
-        Returns
-        -------
-        list of Path
-            The files written (:func:`saved_files`).
-        """
         out = output_directory(directory)
         paths = [out / name for name in SAVED_FILES[:-1]]
         with atomic_path(paths[0]) as tmp:
