@@ -7,7 +7,7 @@ import errno
 import math
 from collections.abc import Callable
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from .._io import json_ready, output_directory, remove_stale
 from ..errors import InvalidValueError
@@ -136,7 +136,13 @@ def figure_format(args: argparse.Namespace, prog: str, out: object = True) -> Fi
 
 
 class Parser(argparse.ArgumentParser):
-    """An argument parser whose errors are one line, not a usage dump."""
+    """An argument parser whose errors are one line, not a usage dump, and whose
+    description and epilog are printed as written (their line breaks kept), unless
+    ``formatter_class`` says otherwise."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", argparse.RawDescriptionHelpFormatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         raise UsageError(f"{self.prog}: error: {message}")

@@ -281,13 +281,8 @@ stdout.
 
 def add_parser(isub: Any) -> None:
     """Add ``hammerstein`` to the ``identify`` subcommands ``isub``."""
-    p = isub.add_parser(
-        "hammerstein",
-        help="a Hammerstein model of DATA, or (without DATA) the robot-joint experiment",
-        description=_DESCRIPTION,
-        epilog=_EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    summary = "a Hammerstein model of DATA, or (without DATA) the robot-joint experiment"
+    p = isub.add_parser("hammerstein", help=summary, description=_DESCRIPTION, epilog=_EPILOG)
     p.add_argument("data", nargs="?", metavar="DATA", help="data file (.csv, .npz or text)")
     p.add_argument("--lags", type=positive_int(2), metavar="N", help="impulse response length (40)")
     p.add_argument(

@@ -332,12 +332,9 @@ and where the partial run is kept) or the results could not be written; 2 bad in
 
 def add_parser(sub: Any) -> None:
     """Add ``simulate`` to the subcommands ``sub``."""
+    summary = "simulate the closed loop (the paper's arm on the square by default)"
     sim = sub.add_parser(
-        "simulate",
-        help="simulate the closed loop (the paper's arm on the square by default)",
-        description=_SIMULATE_DESCRIPTION,
-        epilog=_SIMULATE_EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        "simulate", help=summary, description=_SIMULATE_DESCRIPTION, epilog=_SIMULATE_EPILOG
     )
     sim.add_argument("--scenario", metavar="FILE.toml", help="scenario file (TOML)")
     sim.add_argument(
