@@ -33,6 +33,7 @@ from ._common import (
     check_out,
     figure_format,
     json_ready,
+    word_or_number,
     write_failed,
 )
 
@@ -81,15 +82,7 @@ def _controller_option(text: str) -> str:
     )
 
 
-def _delay_option(text: str) -> str | float:
-    if text in DELAY_MODELS:
-        return text
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"must be a number of seconds (>= 0), 'seed' or 'dispersive'. Got {text!r} instead."
-        ) from None
+_delay_option = word_or_number(DELAY_MODELS, "a number of seconds (>= 0), 'seed' or 'dispersive'")
 
 
 def _overrides(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
