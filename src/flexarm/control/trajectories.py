@@ -424,12 +424,8 @@ class Line(_StraightSegments):
 class PointToPoint(Line):
     """A rest-to-rest move: :class:`Line` with ``timing="quintic"`` fixed.
 
-    Parameters
-    ----------
-    start, end : array_like, shape (2,)
-        End points in m.
-    duration : float
-        Travel time in s (> 0).
+    It takes the parameters of :class:`Line` but ``timing``: ``start``, ``end`` (m)
+    and ``duration`` (s).
 
     Examples
     --------
