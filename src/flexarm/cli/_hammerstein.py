@@ -97,7 +97,7 @@ def _fit_data(args: argparse.Namespace) -> int:
     from ..ident.hammerstein.whiteness import IdentificationWarning
 
     t0 = time.perf_counter()
-    columns = given(args, x="x", y="y")
+    columns = given(args, "x", "y")
     seed = 0 if args.seed is None else args.seed
     with library_errors(PROG), warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentificationWarning)  # in the summary instead
@@ -109,12 +109,12 @@ def _fit_data(args: argparse.Namespace) -> int:
             y,
             **given(
                 args,
+                "order",
+                "method",
+                "bootstrap",
                 n_lags="lags",
-                order="order",
                 known_points="known",
-                method="method",
                 n_knots="knots",
-                bootstrap="bootstrap",
             ),
             rng=seed,
             u_label=str(columns.get("x", 0)),
@@ -157,7 +157,7 @@ def _robot(args: argparse.Namespace) -> int:
             design = design_dead_band_excitation(rng=pilot_rng)
             excitation = design.excitation
         else:
-            excitation = JointExcitation(**given(args, duration="duration"))
+            excitation = JointExcitation(**given(args, "duration"))
         res = identify_joint(
             excitation=excitation,
             torque_measurement=measurement,

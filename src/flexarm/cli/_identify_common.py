@@ -80,9 +80,11 @@ def positive_int(minimum: int) -> Callable[[str], int]:
     return as_int
 
 
-def given(args: argparse.Namespace, **names: str) -> dict[str, Any]:
-    """``{parameter: value}`` of the options the user gave (``names``: parameter -> dest)."""
-    return {p: getattr(args, d) for p, d in names.items() if getattr(args, d) is not None}
+def given(args: argparse.Namespace, *same: str, **names: str) -> dict[str, Any]:
+    """``{parameter: value}`` of the options the user gave (``same``: parameters named as
+    their option's dest; ``names``: parameter -> dest)."""
+    dests = {**{name: name for name in same}, **names}
+    return {p: getattr(args, d) for p, d in dests.items() if getattr(args, d) is not None}
 
 
 def report(

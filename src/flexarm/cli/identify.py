@@ -55,14 +55,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         res = fit_regression(
             x,
             y,
-            **given(
-                args,
-                kernel="kernel",
-                bandwidth="bandwidth",
-                decay="decay",
-                grid="grid",
-                binned="binned",
-            ),
+            **given(args, "kernel", "bandwidth", "decay", "grid", "binned"),
             series=args.series,
             x_label=str(args.x),
             y_label=str(args.y),
@@ -110,7 +103,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
     fmt = output_options(args, prog)
     t0 = time.perf_counter()
     with library_errors(prog):
-        sizes = given(args, n_min="n_min", n_max="n_max", steps="n_steps")
+        sizes = given(args, "n_min", "n_max", steps="n_steps")
         lo, hi = sizes.get("n_min", 250), sizes.get("n_max", 16000)  # sample_sizes' defaults
         if lo >= hi:
             which = "--n-max" if "n_max" in sizes else "--n-min"
@@ -122,15 +115,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
             args.function,
             n=sample_sizes(**sizes) if sizes else None,
             rng=np.random.default_rng(args.seed),
-            **given(
-                args,
-                repetitions="repetitions",
-                noise="noise",
-                distribution="distribution",
-                kernel="kernel",
-                bandwidth="bandwidth",
-                decay="decay",
-            ),
+            **given(args, "repetitions", "noise", "distribution", "kernel", "bandwidth", "decay"),
         )
     summary: dict[str, Any] = {
         "status": "ok",
