@@ -115,7 +115,17 @@ class _Channel:
 
 
 @dataclass(frozen=True)
-class Encoder(_Channel):
+class _JointChannel(_Channel):
+    """A channel of one joint (:class:`Encoder`, :class:`JointDeflection`)."""
+
+    _index = "joint"
+    joint: int
+    quantum: float = 0.0
+    delay: float = 0.0
+
+
+@dataclass(frozen=True)
+class Encoder(_JointChannel):
     """A joint's encoder: the motor angle with flexible joints, else the joint angle.
 
     Parameters
@@ -129,11 +139,6 @@ class Encoder(_Channel):
         Pure delay of the channel, s (>= 0).
     """
 
-    _index = "joint"
-    joint: int
-    quantum: float = 0.0
-    delay: float = 0.0
-
     def raw(self, arm: FlexibleArm, q: F64) -> F64:
         """The encoder angle of every row of ``q`` (rad), undelayed and unrounded."""
         j = self._index_in(arm)
@@ -143,7 +148,7 @@ class Encoder(_Channel):
 
 
 @dataclass(frozen=True)
-class JointDeflection(_Channel):
+class JointDeflection(_JointChannel):
     """The link's angle relative to its motor across a flexible joint, ``q - q_m``.
 
     Parameters
@@ -153,11 +158,6 @@ class JointDeflection(_Channel):
     quantum, delay : float
         As for :class:`Encoder` (rad, s).
     """
-
-    _index = "joint"
-    joint: int
-    quantum: float = 0.0
-    delay: float = 0.0
 
     def raw(self, arm: FlexibleArm, q: F64) -> F64:
         """``q - q_m`` of the joint for every row of ``q`` (rad)."""
