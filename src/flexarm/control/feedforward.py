@@ -21,14 +21,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._types import F64
 from ..errors import InvalidValueError
 from ..model.arm import FlexibleArm
 
 __all__ = ["RigidDynamics", "rigid_projection"]
-
-F64 = NDArray[np.float64]
 
 
 def rigid_projection(arm: FlexibleArm) -> F64:

@@ -11,7 +11,7 @@ from ...ident.options import METHODS
 from ...model.arm import FlexibleArm
 from .estimation import estimate_friction, estimate_stiffness, fit_hammerstein, windup_secants
 from .experiment import joint_test_arm, measure, run_excitation
-from .parameters import JointExcitation, JointSensors
+from .parameters import JointExcitation, JointSensors, check_types
 from .result import JointIdentification
 
 __all__ = ["TORQUE_MEASUREMENTS", "identify_joint"]
@@ -100,15 +100,9 @@ def identify_joint(
         )
     excitation = JointExcitation() if excitation is None else excitation
     sensors = JointSensors() if sensors is None else sensors
-    for name, value, kind in (
-        ("excitation", excitation, JointExcitation),
-        ("sensors", sensors, JointSensors),
-    ):
-        if not isinstance(value, kind):
-            raise InvalidTypeError(
-                f"The '{name}' parameter of {_OWNER} must be a {kind.__name__}. "
-                f"Got {type(value).__name__} instead."
-            )
+    check_types(
+        _OWNER, ("excitation", excitation, JointExcitation), ("sensors", sensors, JointSensors)
+    )
     check_option(torque_measurement, "torque_measurement", _OWNER, TORQUE_MEASUREMENTS)
     check_option(method, "method", _OWNER, METHODS)
     quasi_static_fraction = check_real(
