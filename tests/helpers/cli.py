@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 from typing import Any
 
@@ -9,7 +11,7 @@ import pytest
 
 from flexarm.cli import main
 
-__all__ = ["error_line", "help_text", "run", "strict_json"]
+__all__ = ["error_line", "help_text", "run", "run_captured", "strict_json"]
 
 
 def run(capsys: Any, *argv: object) -> tuple[int, str, str]:
@@ -18,6 +20,15 @@ def run(capsys: Any, *argv: object) -> tuple[int, str, str]:
     status = main([str(a) for a in argv])
     out, err = capsys.readouterr()
     return status, out, err
+
+
+def run_captured(*argv: object) -> tuple[int, str, str]:
+    """:func:`run` without ``capsys`` (for a fixture wider than one test): the streams
+    redirected into strings."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        status = main([str(a) for a in argv])
+    return status, out.getvalue(), err.getvalue()
 
 
 def strict_json(text: str) -> Any:
