@@ -85,3 +85,28 @@ def test_stage1_from_the_command_line(stage1):
     )
     written = {p.name for p in out.iterdir()}
     assert {"summary.json", "calibrated.toml", "report.html", "record0.png"} <= written
+
+
+def test_the_current_driven_example_runs_as_it_is_on_a_short_window():
+    """``fsf_current.toml`` reads its six files, builds its arm (rigid joints with their
+    drives, two strips, stage 2's housing at strip 1's tip) and fits: here on 2 s of
+    each part and three evaluations (the whole calibration is a command-line run of
+    minutes; its figures are in the guide)."""
+    data = tomllib.loads((EXAMPLES / "fsf_current.toml").read_text())
+    data["calibration"].update(max_evaluations=3, segment=0.0, initial_state="measured")
+    data["records"][0].update(start=1.1, stop=3.1)
+    data["records"][1].update(start=10.0, stop=12.0)
+    cal = fa.calibrate(CalibrationConfig.from_dict(data, "fsf", EXAMPLES).with_data(DATA))
+    assert [r.role for r in cal.records] == ["training", "validation"]
+    for r in cal.records:
+        assert set(r.channels) == {"th11", "th21", "th12", "th22"}
+        assert len(r.t) == 1000  # 2 s at the logger's 500 Hz
+    p = cal.parameters()
+    assert set(p) == {
+        *("B11", "B21", "Fc1", "Fc2", "Kt2 factor", "EI1", "EI2", "zeta1", "zeta2"),
+        *("delay th12", "delay th22"),
+    }
+    # the logger's strain channels lag its encoders by about 0.1 s
+    assert 0.02 <= p["delay th12"]["value"] <= 0.3 and 0.02 <= p["delay th22"]["value"] <= 0.3
+    train = cal.records[0].channels.values()
+    assert sum(c.fit_percent for c in train) >= sum(c.fit_percent_initial for c in train)
