@@ -192,14 +192,14 @@ class Backends:
                     and tau.ndim == 1  # type: ignore[union-attr]
                     and packed.on_stack
                 ):
-                    result = _empty(packed.n_dof)
-                    if not packed.entry(packed.buf, q, dq, tau, result):
-                        return result
+                    fresh = _empty(packed.n_dof)
+                    if not packed.entry(packed.buf, q, dq, tau, fresh):
+                        return fresh
             except (AttributeError, TypeError):  # not arrays: checked below
                 pass
-            result = packed.forward_dynamics(q, dq, tau, out)
-            if result is not None:
-                return result
+            done = packed.forward_dynamics(q, dq, tau, out)
+            if done is not None:
+                return done
         check_option(backend, "backend", _OWNER, BACKENDS)
         n, real = self.n_dof, backend == "compiled"
         q, dq, tau = checked_state(q, dq, tau, n, self.n_links, real=real)
