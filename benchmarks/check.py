@@ -31,6 +31,7 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
+import inspect
 import json
 import math
 import pathlib
@@ -285,7 +286,13 @@ def measure_kernel_vs_statsmodels(repeat: int) -> Measured:
     X, y = make_data(10**5, np.random.default_rng(SEED))
     grid = np.linspace(0.0, 1.0, 512)
     ours = _times(lambda: NadarayaWatson("gaussian", BANDWIDTH).fit(X, y).predict(grid), repeat)
-    peer = _times(lambda: KernelReg(y, X, var_type="c", reg_type="lc", bw=[BANDWIDTH]).fit(grid), 1)
+    extra = {}  # as bench_ident.py: an explicit generator where KernelReg takes one
+    if "rng" in inspect.signature(KernelReg).parameters:
+        extra["rng"] = np.random.default_rng(SEED)
+    peer = _times(
+        lambda: KernelReg(y, X, var_type="c", reg_type="lc", bw=[BANDWIDTH], **extra).fit(grid),
+        1,
+    )
     return Measured(
         min(peer) / min(ours),
         statistics.median(peer) / statistics.median(ours),

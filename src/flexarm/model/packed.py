@@ -25,7 +25,8 @@ themselves, so a wrong shape never reaches a kernel.
 Every state may also come as a batch: ``q`` of shape ``(m, n_dof)`` is ``m``
 states evaluated in one compiled call, each exactly as a call of its own.
 
-Threads: the kernels release the GIL and nothing they write is shared. The
+Threads: the kernels release the GIL (batches; one state from Python holds it, a
+call being shorter than the release) and nothing they write is shared. The
 packed buffer is never written; a call's workspace is its own, on the stack of
 the compiled entry point (up to :data:`STACK_FLOATS` values: arms of up to 17
 coordinates) or allocated by the call, so concurrent calls on one arm need no
@@ -124,7 +125,15 @@ def _compiled(dispatcher: Any) -> Any:
     return next(iter(overloads.values())).entry_point
 
 
-_dynamics_entry = _compiled(_dynamics)
+@njit_runtime_free([nt.int64(_F1, _F1, _F1, _F1, _F1)], cache=True)
+def _dynamics_held(buf: F64, q: F64, dq: F64, tau: F64, out: F64) -> int:  # pragma: no cover
+    """:func:`_dynamics` holding the GIL: the entry of one state from Python, where
+    releasing and taking back the GIL would add some 35 ns (more under load) to a
+    call of well under a microsecond. Batches release it (:func:`_dynamics_rows`)."""
+    return _dynamics(buf, q, dq, tau, out)
+
+
+_dynamics_entry = _compiled(_dynamics_held)
 
 
 @njit_runtime_free([nt.int64(_F1, _F1, _F2, _F2, _F2, _F2)], **_ENTRY)
