@@ -291,7 +291,9 @@ class PackedArm:
     # ----------------------------------------------------------------- calls
     # The guards read ``dtype`` (a list has none: AttributeError) and leave the
     # rest to the compiled entry points' signatures (a strided, read-only or 3-D
-    # array: TypeError): a few tens of ns of a call of some 600.
+    # array: TypeError): a few tens of ns of a call of some 600. One state goes to
+    # ``entry``, which has no signature to refuse with: ``ndim`` is checked here
+    # (unboxing writes that many shapes), the layout inside (STRIDED).
     def forward_dynamics(self, q: Any, dq: Any, tau: Any, out: Any = None) -> F64 | None:
         """``qddot`` of :func:`flexarm.model.dynamics.forward_dynamics`.
 
