@@ -72,6 +72,7 @@ ZERO      PM    ZERO  PM
 P         PMAX  PM    PMAX
 ========  ====  ====  ====
 
+>>> from flexarm.fuzzy import paper_system
 >>> fls = paper_system()
 >>> round(float(fls(0.0, 0.0)), 12)
 0.166666666667

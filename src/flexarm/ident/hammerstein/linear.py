@@ -152,6 +152,7 @@ class LinearARX(Scored, Estimator[LinearFit]):
 
     Examples
     --------
+    >>> import numpy as np
     >>> rng = np.random.default_rng(0)
     >>> u = rng.normal(size=3000)
     >>> y = ARMA((0.7,), (1.0, 0.5)).filter(u) + 0.05 * rng.normal(size=3000)

@@ -58,6 +58,7 @@ from ...ident.hammerstein._params import CORRELATED_MAX_ORDER
 from ...ident.hammerstein.identifier import HammersteinIdentifier
 from ...ident.hammerstein.whiteness import IdentificationWarning
 from ...model.arm import FlexibleArm
+from ...model.joints import LinearJoint, NonlinearJoint
 from .experiment import joint_test_arm, measure, run_excitation
 from .parameters import JointExcitation, JointSensors, check_types
 
@@ -198,7 +199,7 @@ def design_dead_band_excitation(
             )
     gen = check_rng(rng, _OWNER)
     joint = arm.joints[0] if arm.joints else None
-    if joint is None:
+    if not isinstance(joint, LinearJoint | NonlinearJoint):
         raise InvalidValueError(
             f"The 'arm' parameter of {_OWNER} must have a flexible joint. Got none instead."
         )
