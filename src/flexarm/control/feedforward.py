@@ -4,12 +4,15 @@ With the links held straight (modal coordinates zero) and the motors locked to
 the link angles, a planar two-link arm is a rigid chain whose joint torques are
 
 .. math:: \\tau = M(\\theta_2) \\ddot\\theta + h(\\theta_2, \\dot\\theta),\\quad
-          M = \\begin{pmatrix} \\alpha + 2\\beta\\cos\\theta_2 & \\delta + \\beta\\cos\\theta_2 \\\\
-          \\delta + \\beta\\cos\\theta_2 & \\delta \\end{pmatrix},\\quad
+          M = \\begin{pmatrix} \\alpha + 2\\beta\\cos\\theta_2
+          & \\epsilon + \\beta\\cos\\theta_2 \\\\
+          \\epsilon + \\beta\\cos\\theta_2 & \\delta \\end{pmatrix},\\quad
           h = \\beta\\sin\\theta_2 \\begin{pmatrix} -\\dot\\theta_2 (2\\dot\\theta_1
           + \\dot\\theta_2) \\\\ \\dot\\theta_1^2 \\end{pmatrix}.
 
-The three constants come from the arm's own mass matrix (:meth:`FlexibleArm.mass_matrix`
+with ``epsilon = delta`` but for the elbow's rotor: geared (ratio ``N``, coupled)
+it adds ``J_m`` to ``delta`` and ``J_m / N`` to ``epsilon`` (uncoupled, nothing to
+``epsilon``). The constants come from the arm's own mass matrix (:meth:`FlexibleArm.mass_matrix`
 restricted to rigid motion, at ``theta_2 = 0``), so links, hubs, rotors and the
 payload are all in them. :func:`flexarm.simulate` adds these torques to any
 law's output when asked (``feedforward=True``): the reference pipeline puts
@@ -43,7 +46,8 @@ def rigid_projection(arm: FlexibleArm) -> F64:
 
 @dataclass(frozen=True)
 class RigidDynamics:
-    """The rigid two-link dynamics constants ``alpha, beta, delta`` (kg m**2).
+    """The rigid two-link dynamics constants ``alpha, beta, delta`` and ``epsilon``
+    (kg m**2; ``epsilon`` None: ``delta``, an elbow rotor direct or absent).
 
     Build with :meth:`of` from an arm. Call to get the torques.
 
@@ -56,6 +60,7 @@ class RigidDynamics:
     alpha: float
     beta: float
     delta: float
+    epsilon: float | None = None
 
     @classmethod
     def of(cls, arm: FlexibleArm) -> RigidDynamics:
@@ -68,13 +73,24 @@ class RigidDynamics:
         p = rigid_projection(arm)
         m = p.T @ np.asarray(arm.mass_matrix(np.zeros(arm.n_dof)).real) @ p
         delta = float(m[1, 1])
-        beta = float(m[0, 1]) - delta
-        return cls(alpha=float(m[0, 0]) - 2.0 * beta, beta=beta, delta=delta)
+        epsilon = delta
+        if arm.joints is not None:  # the elbow's rotor: J_m at theta_2, J_m / N coupled
+            jt = arm.joints[1]
+            coupling = 1.0 / jt.gear_ratio if arm.rotor_coupling else 0.0
+            if coupling != 1.0:
+                epsilon = delta - jt.motor_inertia * (1.0 - coupling)
+        beta = float(m[0, 1]) - epsilon
+        return cls(
+            alpha=float(m[0, 0]) - 2.0 * beta,
+            beta=beta,
+            delta=delta,
+            epsilon=None if epsilon == delta else epsilon,
+        )
 
     def mass_matrix(self, theta2: ArrayLike) -> F64:
         """``M(theta_2)``, shape (..., 2, 2), kg m**2."""
         c = np.cos(np.asarray(theta2, dtype=float))
-        m12 = self.delta + self.beta * c
+        m12 = (self.delta if self.epsilon is None else self.epsilon) + self.beta * c
         return np.stack(
             [
                 np.stack([self.alpha + 2 * self.beta * c, m12], -1),
@@ -100,7 +116,7 @@ class RigidDynamics:
         a = np.asarray(ddtheta, dtype=float)
         c, s = np.cos(th[..., 1]), np.sin(th[..., 1])
         m11 = self.alpha + 2 * self.beta * c
-        m12 = self.delta + self.beta * c
+        m12 = (self.delta if self.epsilon is None else self.epsilon) + self.beta * c
         h1 = -self.beta * s * w[..., 1] * (2 * w[..., 0] + w[..., 1])
         h2 = self.beta * s * w[..., 0] ** 2
         return np.stack(
