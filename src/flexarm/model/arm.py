@@ -129,7 +129,7 @@ class FlexibleArm(Backends, RigidKinematics):
     Parameters
     ----------
     links : sequence of Link or RigidLink
-        From the base outwards (a :class:`RigidLink` has no modes).
+        From the base outwards (a :class:`~flexarm.model.link.RigidLink` has no modes).
     payload_mass : float
         Point mass at the last tip, kg (>= 0).
     payload_inertia : float
@@ -140,9 +140,10 @@ class FlexibleArm(Backends, RigidKinematics):
         ``"clamped-free"`` does not (user guide, "How many modes").
     joints : sequence of LinearJoint, NonlinearJoint or RigidJoint, optional
         One joint per link (None: rigid joints without rotors or friction).
-        Flexible joints add the motor angles to ``q``; :class:`RigidJoint` s add
-        their rotors, viscous and Makkar friction to the joint angles. An arm
-        takes flexible joints or rigid ones, not both.
+        Flexible joints add the motor angles to ``q``; rigid joints
+        (:class:`~flexarm.model.joints.RigidJoint`) add their rotors, viscous and
+        Makkar friction to the joint angles. An arm takes flexible joints or rigid
+        ones, not both.
     mode_normalization : {"mass", "amplitude", "tip"}
         Scaling of the mode shapes (:mod:`flexarm.modes`); default ``"mass"``.
     mode_amplitude : float
@@ -332,7 +333,8 @@ class FlexibleArm(Backends, RigidKinematics):
     @property
     def has_flexible_joints(self) -> bool:
         """Whether the joints are flexible (a spring each): then ``q`` holds the
-        motor angles. Rigid joints (None, or :class:`RigidJoint`) have none."""
+        motor angles. Rigid joints (None, or
+        :class:`~flexarm.model.joints.RigidJoint`) have none."""
         return self.joints is not None and not isinstance(self.joints[0], RigidJoint)
 
     @property
