@@ -99,6 +99,7 @@ from ..errors import InvalidTypeError, InvalidValueError
 from .arrays import ArmArrays
 from .backends import Backends
 from .beam import NORMALIZATIONS, BeamModes
+from .drives import Drive
 from .foreshortening import shortening_matrix
 from .joints import FRICTION_SIDES, LinearJoint, NonlinearJoint, RigidJoint
 from .kinematics import RigidKinematics, deflected_point
@@ -160,6 +161,12 @@ class FlexibleArm(Backends, RigidKinematics):
         stiffening it brings; default True. False is the paper's linear
         kinematics, which diverge once a link turns faster than its first
         bending frequency.
+    drives : sequence of Drive or None, optional
+        One :class:`~flexarm.model.drives.Drive` (or None) per joint: the input of a
+        driven joint is its motor current (A), :meth:`joint_torques` turns the
+        inputs into the joint torques. The model takes the rotor from the joint
+        (give a geared rotor's ``N**2 J_r`` as its ``motor_inertia`` with
+        ``gear_ratio=N``), not from the drive.
 
     Examples
     --------
@@ -183,6 +190,7 @@ class FlexibleArm(Backends, RigidKinematics):
     joint_friction: str = "link"
     rotor_coupling: bool = True
     geometric_stiffening: bool = True
+    drives: Sequence[Drive | None] | None = None
     _derived: dict[str, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -200,6 +208,8 @@ class FlexibleArm(Backends, RigidKinematics):
         if self.joints is not None:
             set_(self, "joints", self._check_joints(self.joints, len(links)))
         check_option(self.joint_friction, "joint_friction", _OWNER, FRICTION_SIDES)
+        if self.drives is not None:
+            set_(self, "drives", self._check_drives(self.drives, len(links)))
         for flag in ("rotor_coupling", "geometric_stiffening"):
             if not isinstance(getattr(self, flag), bool):
                 raise InvalidTypeError(
@@ -298,6 +308,55 @@ class FlexibleArm(Backends, RigidKinematics):
                     f"a RigidLink. Got {k} instead."
                 )
         return dataclasses.replace(self, links=links, **overrides)
+
+    @staticmethod
+    def _check_drives(drives: Any, n_links: int) -> tuple[Drive | None, ...]:
+        if not isinstance(drives, Sequence) or isinstance(drives, str):
+            raise InvalidTypeError(
+                f"The 'drives' parameter of {_OWNER} must be a sequence of Drive or None, "
+                f"one per joint. Got {type(drives).__name__} instead."
+            )
+        checked = tuple(drives)
+        for k, d in enumerate(checked):
+            if d is not None and not isinstance(d, Drive):
+                raise InvalidTypeError(
+                    f"The 'drives' parameter of {_OWNER} must hold Drive objects or None. "
+                    f"Got {type(d).__name__} at position {k} instead."
+                )
+        if len(checked) != n_links:
+            raise InvalidValueError(
+                f"The 'drives' parameter of {_OWNER} must hold one Drive (or None) per joint "
+                f"({n_links}). Got {len(checked)} instead."
+            )
+        return checked
+
+    def joint_torques(self, inputs: ArrayLike) -> NDArray[np.float64]:
+        """The joint torques (N m) of joint inputs: a motor current (A) at a joint with
+        a :class:`~flexarm.model.drives.Drive` (:meth:`Drive.joint_torque`: less the
+        reading's offset, clipped to the amplifier's limit, times ``eta K_t N``), a
+        torque (N m) at a joint without one.
+
+        Parameters
+        ----------
+        inputs : array_like, shape (..., n_links)
+            One input per joint, in the joints' order.
+
+        Returns
+        -------
+        ndarray, shape (..., n_links)
+            N m, what :meth:`forward_dynamics` and the simulators take as ``tau``.
+        """
+        u = check_array(inputs, "inputs", f"{_OWNER}.joint_torques", real=True)
+        if u.ndim == 0 or u.shape[-1] != self.n_links:
+            raise InvalidValueError(
+                f"The 'inputs' parameter of {_OWNER}.joint_torques must have {self.n_links} "
+                f"entries (one per joint) along its last axis. Got shape {u.shape} instead."
+            )
+        out = np.array(u, dtype=float)
+        for j, d in enumerate(self.drives or ()):
+            if d is not None:
+                out[..., j] = d.joint_torque(current=u[..., j])
+        return out
 
     @staticmethod
     def _check_joints(joints: Any, n_links: int) -> tuple[AnyJoint, ...]:
