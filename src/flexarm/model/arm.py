@@ -128,7 +128,7 @@ AnyJoint = LinearJoint | NonlinearJoint | RigidJoint
 
 
 @dataclass(frozen=True)
-class FlexibleArm(Backends, RigidKinematics):
+class FlexibleArm(RigidKinematics, Backends):
     """A planar arm of ``N >= 1`` flexible links on revolute joints.
 
     Parameters

@@ -33,7 +33,9 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import check_option
 from ..errors import InvalidTypeError, InvalidValueError
 from .arrays import LEN, ArmArrays
+from .beam import BeamModes
 from .kernel_checks import checked_coordinates, checked_state, shape_message
+from .kinematics import point_position_reference
 
 if TYPE_CHECKING:  # Numba is loaded on first use of the packed arm
     from .packed import PackedArm
@@ -66,6 +68,10 @@ class Backends:
     def arrays(self) -> ArmArrays:
         raise NotImplementedError
 
+    @property
+    def modes(self) -> tuple[BeamModes, ...]:
+        raise NotImplementedError
+
     def point_basis(self, link: int, distance: float) -> NDArray[np.float64]:
         raise NotImplementedError
 
@@ -78,11 +84,6 @@ class Backends:
     def _forward_dynamics_numpy(
         self, q: NDArray[Any], dq: NDArray[Any], tau: NDArray[Any]
     ) -> NDArray[Any]:
-        raise NotImplementedError
-
-    def _point_position_numpy(
-        self, q: NDArray[Any], link: int, distance: float
-    ) -> NDArray[np.float64]:
         raise NotImplementedError
 
     def _packed(self) -> PackedArm:
@@ -248,7 +249,7 @@ class Backends:
         link, distance = self._check_point(link, distance)
         q = checked_coordinates(q, self.n_dof, real=backend == "compiled")
         if backend == "numpy" or q.dtype.kind == "c":
-            return self._point_position_numpy(q, link, distance)
+            return point_position_reference(self.modes[link], self.arrays, q, link, distance)
         packed = self._packed()
         phi = packed.bases.get((link, distance))
         if phi is None:
