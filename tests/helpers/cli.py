@@ -5,13 +5,14 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import signal
 from typing import Any
 
 import pytest
 
 from flexarm.cli import main
 
-__all__ = ["error_line", "help_text", "run", "run_captured", "strict_json"]
+__all__ = ["as_at_a_terminal", "error_line", "help_text", "run", "run_captured", "strict_json"]
 
 
 def run(capsys: Any, *argv: object) -> tuple[int, str, str]:
@@ -54,3 +55,10 @@ def error_line(err: str) -> str:
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in err, err
     return lines[0]
+
+
+def as_at_a_terminal() -> None:
+    """``preexec_fn`` of a command a test interrupts: Ctrl-C handled as at a terminal.
+    A suite started in the background inherits SIGINT ignored (POSIX shells do that to
+    background jobs), and Python then leaves it ignored in the child."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
