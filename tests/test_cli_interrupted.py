@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from flexarm.sim.results import RESULT_FILES, SimulationResult
+from helpers.cli import as_at_a_terminal
 
 pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="POSIX signals and /dev/ptmx")
 HANG = 120.0  # s: a guard against a hung child, not a timing claim
@@ -32,6 +33,7 @@ def _flexarm(*args: str, stderr_tty: bool = False) -> tuple[subprocess.Popen[byt
     proc = subprocess.Popen(
         [sys.executable, "-m", "flexarm", *args],
         stdout=subprocess.PIPE,
+        preexec_fn=as_at_a_terminal,
         **kw,  # type: ignore[call-overload]
     )
     if stderr_tty:

@@ -18,7 +18,7 @@ from flexarm.sweeps import execute
 from flexarm.sweeps.driver import sweep
 from flexarm.sweeps.journal import JOURNAL_FILE, read_journal
 from flexarm.sweeps.table import SweepTable
-from helpers.cli import help_text, run, strict_json
+from helpers.cli import as_at_a_terminal, help_text, run, strict_json
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "sweep_noise.toml"
@@ -120,7 +120,13 @@ def test_a_real_sigint_leaves_whole_lines_and_the_sweep_resumes(tmp_path, how):
     )
     out = tmp_path / "out"
     argv = [sys.executable, "-m", "flexarm", "sweep", str(sweep_file), "--out", str(out), *how]
-    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        argv,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=as_at_a_terminal,
+    )
     journal = out / JOURNAL_FILE
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and proc.poll() is None:

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+import flexarm as fa
 from flexarm.errors import InvalidValueError
 from flexarm.model.drives import Drive
 
@@ -56,3 +57,30 @@ def test_joint_torque_takes_one_input():
         d.joint_torque()
     with pytest.raises(InvalidValueError, match="one of them"):
         d.joint_torque(current=1.0, motor_torque=1.0)
+
+
+def test_an_arm_with_drives_turns_currents_into_joint_torques():
+    """FlexibleArm(drives=...): a driven joint's input is its current, by hand
+    eta K_t N (i - i0) clipped at the limit (0.75 x 0.119 x 100 = 8.925 N m/A, limit
+    1 A); a joint without a drive takes its input as the torque."""
+    drive = Drive(
+        torque_constant=0.119,
+        gear_ratio=100,
+        efficiency=0.75,
+        current_limit=1.0,
+        current_offset=0.02,
+    )
+    links = [fa.Link(1.0, 1.0, 1.0, n_modes=0)] * 2
+    arm = fa.FlexibleArm(links, drives=[drive, None])
+    inputs = np.array([[0.52, 3.0], [3.0, -1.5], [-2.0, 0.0]])
+    expected = np.array([[8.925 * 0.5, 3.0], [8.925, -1.5], [-8.925, 0.0]])
+    np.testing.assert_allclose(arm.joint_torques(inputs), expected, rtol=1e-14)
+    np.testing.assert_allclose(arm.joint_torques(inputs[0]), expected[0], rtol=1e-14)
+    undriven = fa.FlexibleArm(links)
+    np.testing.assert_array_equal(undriven.joint_torques(inputs), inputs)
+    with pytest.raises(ValueError, match=r"'drives'.*one Drive"):
+        fa.FlexibleArm(links, drives=[drive])
+    with pytest.raises(TypeError, match=r"'drives'.*Drive objects"):
+        fa.FlexibleArm(links, drives=[drive, 1.0])
+    with pytest.raises(ValueError, match=r"'inputs'.*2 entries"):
+        arm.joint_torques([1.0, 2.0, 3.0])

@@ -154,3 +154,31 @@ def test_to_arrays_and_from_arrays_resume_exactly(family):
     else:
         np.testing.assert_array_equal(resumed.impulse_response_, whole.impulse_response_)
         np.testing.assert_array_equal(resumed.nonlinearity_, whole.nonlinearity_)
+
+
+@pytest.mark.parametrize(
+    ("run", "match"),
+    [
+        (lambda: _phi(lambda u: u[:3]), r"'phi' .* must return an array of the input's shape"),
+        (lambda: _phi(lambda u: u * np.nan), r"'phi' .* must return finite values"),
+        (lambda: _kernel(lambda u: np.ones(3)), r"'kernel' .* must return shape \(2,\)"),
+        (lambda: _kernel(lambda u: np.full(u.shape[0], np.inf)), "'kernel' .* finite values"),
+    ],
+)
+def test_a_user_callable_that_returns_a_bad_array_is_named(run, match):
+    from flexarm.errors import InvalidValueError
+
+    with pytest.raises(InvalidValueError, match=match):
+        run()
+
+
+def _phi(phi):
+    from flexarm.ident import simulate_hammerstein
+
+    return simulate_hammerstein(phi, [0.5], [1.0], np.ones(10))
+
+
+def _kernel(kernel):
+    from flexarm.ident import SemiRecursiveKernelRegression
+
+    return SemiRecursiveKernelRegression(kernel=kernel).fit([0.0, 1.0], [1.0, 2.0]).predict([0.5])

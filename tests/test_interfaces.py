@@ -154,3 +154,30 @@ def test_dir_lists_the_lazy_names():
         assert name in dir(flexarm)
     with pytest.raises(AttributeError, match="no attribute 'nonesuch'"):
         flexarm.nonesuch  # noqa: B018
+
+
+def test_the_lazy_names_are_read_from_the_type_checking_block():
+    from flexarm._lazy import declared_names
+
+    source = (
+        "if TYPE_CHECKING:\n"
+        "    from .a import B as B\n"
+        "    from .c.d import e as e, F as F\n"
+        "from .g import H\n"  # run at import time: not a lazy name
+    )
+    assert declared_names(source, "pkg") == {"B": "a", "e": "c.d", "F": "c.d"}
+    with pytest.raises(ImportError, match=r"'from \.x import Y' must re-export as 'Y as Y'"):
+        declared_names("if TYPE_CHECKING:\n    from .x import Y\n", "pkg")
+    with pytest.raises(ImportError, match="may hold only"):
+        declared_names("if TYPE_CHECKING:\n    import numpy as np\n", "pkg")
+
+
+def test_a_lazy_package_without_a_list_of_submodules_exposes_its_public_modules():
+    import flexarm.ident
+
+    modules = {p.stem for p in (SRC / "ident").glob("*.py") if p.name != "__init__.py"}
+    public = {m for m in modules if not m.startswith("_")}
+    assert public and public <= set(dir(flexarm.ident))
+    assert {"_estimator", "_output"} <= modules
+    assert (modules - public).isdisjoint(dir(flexarm.ident))
+    assert public.isdisjoint(flexarm.ident.__all__)  # modules, not public names

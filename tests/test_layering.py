@@ -20,8 +20,8 @@ SRC = pathlib.Path(__file__).resolve().parents[1] / "src" / "flexarm"
 # each other.
 LAYERS: list[tuple[str, ...]] = [
     ("_version", "errors"),  # the version; the error types
-    # lazy names, checks, atomic output, Numba, limits on a request's memory and time, files
-    ("_lazy", "_validation", "_io", "_compile", "_budget", "_config"),
+    # lazy names, array types, checks, atomic output, Numba, limits on memory and time, files
+    ("_lazy", "_types", "_validation", "_io", "_compile", "_budget", "_config"),
     ("figures",),  # figure files (format, resolution, atomic writes) and the plots' style
     ("model", "fuzzy", "ident"),  # the plant; fuzzy inference; estimators from data
     ("sensing",),  # what a controller can see: sensors and transport delays

@@ -156,3 +156,40 @@ def test_link_tip_body_is_checked():
         fa.Link(1.0, 1.0, 1.0, tip_mass=-0.1)
     with pytest.raises(TypeError, match=r"'links'.*Link or RigidLink"):
         fa.FlexibleArm([fa.Link(1.0, 1.0, 1.0), "rigid"])
+
+
+def test_an_arm_of_rigid_parts_and_tip_bodies_conserves_its_energy():
+    """No damping, no friction: T + V stays constant along a free motion of an arm of
+    geared rigid joints, a rigid link and flexible links with tip bodies."""
+    from scipy.integrate import solve_ivp
+
+    arm = fa.FlexibleArm(
+        [
+            fa.Link(2.0, 1676.0, 0.335, n_modes=2, tip_mass=0.3, tip_inertia=0.02),
+            fa.RigidLink(1.5, 0.8, 0.6, 0.1, hub_mass=0.2, tip_inertia=0.05),
+            fa.Link(1.2, 800.0, 0.3, n_modes=1, tip_mass=0.1, tip_inertia=0.004),
+        ],
+        joints=[
+            fa.RigidJoint(0.3, gear_ratio=100.0),
+            fa.RigidJoint(0.2, gear_ratio=4.0),
+            fa.RigidJoint(0.0),
+        ],
+        payload_mass=0.4,
+    )
+    rng = np.random.default_rng(1)
+    n = arm.n_dof
+    x0 = np.r_[rng.normal(size=n) * 0.03, rng.normal(size=n)]
+    sol = solve_ivp(
+        lambda t, x: np.r_[x[n:], arm.forward_dynamics(x[:n], x[n:], np.zeros(3))],
+        (0.0, 0.5),
+        x0,
+        method="DOP853",
+        rtol=1e-11,
+        atol=1e-12,
+        t_eval=np.linspace(0.0, 0.5, 11),
+    )
+    energies = np.array([sum(arm.energy(x[:n], x[n:])) for x in sol.y.T])
+    assert np.abs(energies - energies[0]).max() <= 1e-8 * energies[0]
+    np.testing.assert_allclose(
+        arm.coriolis(x0[:n], x0[n:]) @ x0[n:], arm.velocity_terms(x0[:n], x0[n:]), atol=1e-12
+    )

@@ -189,6 +189,86 @@ def test_lists_strided_read_only_and_integer_input_give_the_same_numbers():
     assert np.array_equal(arm.tip_position(wide[:, 0]), arm.tip_position(q))
 
 
+def test_views_the_fast_path_cannot_take_give_the_same_numbers():
+    """The compiled function is called without Numba's dispatch: what the dispatch
+    refused (reversed, strided, misaligned vectors; objects that only look like
+    arrays) must be converted, not read as contiguous memory."""
+    arm = ARMS["paper"]()
+    q, dq, tau = (x[0] for x in states(arm, 1))
+    want = arm.forward_dynamics(q, dq, tau)
+    reversed_q = q[::-1].copy()[::-1]  # strides -8
+    assert reversed_q.strides == (-8,)
+    raw = np.zeros(8 * arm.n_dof + 1, dtype=np.uint8)
+    misaligned = raw[1:].view(np.float64)
+    misaligned[:] = dq
+    assert misaligned.ctypes.data % 8 != 0
+
+    class Alike:  # a dtype and ndim, but not an ndarray
+        dtype, ndim = np.dtype(np.float64), 1
+
+        def __array__(self, dtype=None, copy=None):
+            return tau.copy()
+
+    assert np.array_equal(arm.forward_dynamics(reversed_q, dq, tau), want)
+    assert np.array_equal(arm.forward_dynamics(q, misaligned, tau), want)
+    assert np.array_equal(arm.forward_dynamics(q, dq, Alike()), want)
+    with pytest.raises(InvalidValueError, match=r"'q' .* shape"):  # 0-d
+        arm.forward_dynamics(np.float64(0.0), dq, tau)
+
+
+@pytest.mark.parametrize("name", ["paper", "rigid", "three-links-stiffening"])
+def test_out_receives_the_same_numbers(name):
+    arm = ARMS[name]()
+    q, dq, tau = states(arm, 4)
+    want = arm.forward_dynamics(q, dq, tau)
+    out = np.full(arm.n_dof, np.nan)
+    got = arm.forward_dynamics(q[0], dq[0], tau[0], out=out)
+    assert got is out and np.array_equal(out, want[0])
+    # out may be the state itself: the state is read before it is written
+    q0, dq0 = q[0].copy(), dq[0].copy()
+    assert arm.forward_dynamics(q0, dq0, tau[0], out=q0) is q0
+    assert np.array_equal(q0, want[0])
+    assert np.array_equal(arm.forward_dynamics(q[1], dq1 := dq[1].copy(), tau[1], out=dq1), want[1])
+    # anything writable of the right shape: strided, batches, the NumPy backend
+    wide = np.zeros((arm.n_dof, 2))
+    assert arm.forward_dynamics(q[2], dq[2], tau[2], out=wide[:, 1]).base is wide
+    assert np.array_equal(wide[:, 1], want[2]) and not wide[:, 0].any()
+    batch = np.empty((4, arm.n_dof))
+    assert arm.forward_dynamics(q, dq, tau, out=batch) is batch
+    assert np.array_equal(batch, want)
+    ref = arm.forward_dynamics(q[3], dq[3], tau[3], backend="numpy")
+    into = np.empty(arm.n_dof, dtype=complex)
+    arm.forward_dynamics(q[3], dq[3], tau[3], backend="numpy", out=into)
+    assert np.array_equal(into.real, ref) and not into.imag.any()
+
+
+@pytest.mark.parametrize(
+    ("out", "error", "match"),
+    [
+        (np.empty(5), InvalidValueError, r"'out' .* shape \(4,\). Got shape \(5,\)"),
+        (np.empty((1, 4)), InvalidValueError, r"'out' .* shape \(4,\)"),
+        ([0.0] * 4, InvalidTypeError, "'out' .* NumPy array. Got list"),
+        (np.empty(4, dtype=np.float32), InvalidTypeError, "'out' .* float64 casts to"),
+        (np.empty(4, dtype=np.int64), InvalidTypeError, "'out' .* float64 casts to"),
+    ],
+)
+def test_a_bad_out_is_refused_by_name(out, error, match):
+    arm = ARMS["paper"]()
+    q, dq, tau = (x[0] for x in states(arm, 1))
+    with pytest.raises(error, match=match):
+        arm.forward_dynamics(q, dq, tau, out=out)
+
+
+def test_a_read_only_out_is_refused_and_left_alone():
+    arm = ARMS["paper"]()
+    q, dq, tau = (x[0] for x in states(arm, 1))
+    out = np.zeros(arm.n_dof)
+    out.flags.writeable = False
+    with pytest.raises(InvalidValueError, match=r"'out' .* writable"):
+        arm.forward_dynamics(q, dq, tau, out=out)
+    assert not out.any()
+
+
 def test_complex_input_takes_the_numpy_reference():
     arm = ARMS["paper-2modes"]()
     q, dq, tau = (x[0] for x in states(arm, 1))

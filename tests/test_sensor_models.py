@@ -85,8 +85,13 @@ def test_names_and_parsing():
             payload_inertia=0.02,
         ),
         fa.FlexibleArm.paper(joints=[fa.LinearJoint.default()] * 2),
+        fa.FlexibleArm.paper(joints=[fa.LinearJoint(1e4, 0.3)] * 2, rotor_coupling=False),
+        fa.FlexibleArm(
+            [fa.Link(1.0, 5.0, 1.1, n_modes=1), fa.RigidLink(0.8, 0.5, 0.3, 0.02, tip_mass=0.1)],
+            joints=[fa.RigidJoint(0.2, gear_ratio=7.0), fa.RigidJoint(0.05, gear_ratio=20.0)],
+        ),
     ],
-    ids=["paper", "hubs-payload", "flexible-joints"],
+    ids=["paper", "hubs-payload", "flexible-joints", "spong-rotors", "rigid-geared-joints"],
 )
 def test_rigid_dynamics_is_the_arms_dynamics_in_rigid_motion(arm):
     """tau = P' (M(q0) P ddtheta + C(q0, P dtheta) P dtheta) with q0 = P theta: the

@@ -26,6 +26,8 @@ import types
 from dataclasses import dataclass, field
 from typing import Any
 
+from flexarm._lazy import declared_names
+
 ROOT = "flexarm"
 
 #: Section titles of a module page, in order, by kind of object.
@@ -64,6 +66,8 @@ def _bindings(modname: str) -> dict[str, tuple[str, str] | None]:
     package = modname if hasattr(module, "__path__") else modname.rpartition(".")[0]
     found: dict[str, tuple[str, str] | None] = {}
     lazy = getattr(module, "_NAMES", None)
+    if lazy is None and tree is not None and hasattr(module, "__path__"):
+        lazy = declared_names(inspect.getsource(module), modname)  # what attach reads
     if isinstance(lazy, dict):  # flexarm._lazy.attach: name -> relative module
         for name, rel in lazy.items():
             found[name] = (f"{modname}.{rel}", name)

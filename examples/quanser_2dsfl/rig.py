@@ -33,7 +33,7 @@ import numpy as np
 
 import flexarm as fa
 from flexarm.model.joints import LinearJoint
-from flexarm.model.link import Link
+from flexarm.model.link import Link, RigidLink
 
 STEEL_DENSITY = 7850.0  # kg/m**3: the data sheet gives none
 MEASURED_HZ = (1.82, 1.90)  # the first strip's ringing in the LQ step runs
@@ -48,7 +48,7 @@ TABLE: tuple[tuple[str, str, str, str], ...] = (
         "B11",
         "viscous damping at drive 1's shaft, N m s/rad",
         "joints[0].motor_damping",
-        "(a rigid joint's damping: not in this form)",
+        "fsf_current.toml: joints[0].damping (a RigidJoint)",
     ),
     ("B12", "strip 1 damping at its axis (neglected: 0)", "-", "links[0].modal_damping (fitted)"),
     ("Kg1, Kt1", "gear ratio 100, torque constant 0.119 N m/A", "drives[0]", "drives[0]"),
@@ -58,7 +58,12 @@ TABLE: tuple[tuple[str, str, str, str], ...] = (
         "drives[0].efficiency",
         "drives[0].efficiency",
     ),
-    ("Jm1", "rotor inertia at the motor shaft, kg m**2", "in J11", "drives[0].rotor_inertia"),
+    (
+        "Jm1",
+        "rotor inertia at the motor shaft, kg m**2",
+        "in J11",
+        "joints[0].motor_inertia = Kg1**2 Jm1",
+    ),
     ("J1fix", "motor fixture inertia, kg m**2", "in J11", "links[0].hub_inertia"),
     (
         "J11",
@@ -66,12 +71,12 @@ TABLE: tuple[tuple[str, str, str, str], ...] = (
         "joints[0].motor_inertia",
         "(its parts instead)",
     ),
-    ("M12", "stage 2 at strip 1's tip, kg", "links[1].hub_mass", "links[1].hub_mass"),
+    ("M12", "stage 2 at strip 1's tip, kg", "links[0].tip_mass", "links[0].tip_mass"),
     (
         "J12",
         "stage 2 about axis 1, kg m**2",
-        "links[0] inertia",
-        "links[1].hub_inertia = J12 - M12 L1**2 - rho1 L1**3 / 3 - (stage 2's outboard part)",
+        "links[0].tip_inertia (as in the beam model)",
+        "links[0].tip_inertia = J12 - M12 L1**2 - rho1 L1**3/3 - stage 2 turning - J2fix",
     ),
     ("X2, T2", "strip 2 width and thickness, m", "(through Ks2)", "links[1] EI and density"),
     ("L2", "strip 2 length, m", "links[1].length", "links[1].length"),
@@ -80,7 +85,7 @@ TABLE: tuple[tuple[str, str, str, str], ...] = (
         "B21",
         "viscous damping at drive 2's shaft, N m s/rad",
         "joints[1].motor_damping",
-        "(a rigid joint's damping: not in this form)",
+        "fsf_current.toml: joints[1].damping (a RigidJoint)",
     ),
     (
         "B22",
@@ -93,13 +98,13 @@ TABLE: tuple[tuple[str, str, str, str], ...] = (
         "Jm2, J2fix, J21",
         "drive 2's rotor, fixture, at its output",
         "joints[1].motor_inertia",
-        "drives[1].rotor_inertia, links[1].hub_inertia",
+        "joints[1].motor_inertia = Kg2**2 Jm2, links[1].hub_inertia = J2fix",
     ),
     ("M22", "tip load of strip 2, kg", "payload_mass", "payload_mass"),
     (
         "J22",
         "tip load about axis 2 (the formula, not the CAD's)",
-        "links[1] inertia",
+        "payload_inertia = J22 - M22 L2**2 (strip 2 a uniform rod)",
         "payload_inertia = J22 - M22 L2**2",
     ),
     (
@@ -144,43 +149,64 @@ def vendor_numbers(directory: Path) -> dict[str, float]:
     return names
 
 
+def _bodies(v: dict[str, float]) -> dict[str, float]:
+    """The mass bookkeeping both forms share: the strips' density, the tip load about
+    its own centre, and stage 2's housing (what of ``J12`` turns with strip 1's tip and
+    not with stage 2: ``J12 - M12 L1**2 - rho1 L1**3 / 3`` less stage 2's turning part
+    about its axis and drive 2's output fixture ``J2fix``)."""
+    rho1 = STEEL_DENSITY * v["X1"] * v["T1"]
+    rho2 = STEEL_DENSITY * v["X2"] * v["T2"]
+    tip_load = v["J22"] - v["M22"] * v["L2"] ** 2
+    turning = rho2 * v["L2"] ** 3 / 3.0 + v["M22"] * v["L2"] ** 2 + tip_load
+    housing = v["J12"] - v["M12"] * v["L1"] ** 2 - rho1 * v["L1"] ** 3 / 3.0 - turning
+    return {"rho1": rho1, "rho2": rho2, "tip_load": tip_load, "housing": housing - v["J2fix"]}
+
+
 def joint_model(v: dict[str, float]) -> fa.FlexibleArm:
-    """The vendor's form: rigid links (no modes) on flexible joints of stiffness Ks."""
+    """The vendor's form: rigid strips (no modes) on flexible joints of stiffness Ks,
+    with the drives' inertia and damping at the motor side of each spring."""
+    b = _bodies(v)
 
-    # A rigid link of length L carrying the inertia J about its joint: a uniform strip
-    # of the same inertia (J = rho L**3 / 3); its EI is never used (no modes).
-    def rigid(length: float, inertia: float) -> Link:
-        return Link(length, 1.0, 3.0 * inertia / length**3, n_modes=0)
+    def strip(length: float, rho: float, **bodies: float) -> RigidLink:
+        mass = rho * length
+        return RigidLink(length, mass, length / 2.0, mass * length**2 / 12.0, **bodies)
 
-    j22 = v["J22"]
     return fa.FlexibleArm(
-        [rigid(v["L1"], v["J12"] - v["M12"] * v["L1"] ** 2), rigid(v["L2"], j22)],
-        joints=[
-            LinearJoint(v["Ks1"], v["J11"], motor_damping=v["B11"]),
-            LinearJoint(v["Ks2"], v["J21"], motor_damping=v["B21"]),
+        [
+            strip(v["L1"], b["rho1"], tip_mass=v["M12"], tip_inertia=b["housing"]),
+            strip(v["L2"], b["rho2"]),
         ],
-        payload_mass=0.0,
-        boundary="clamped-free",
+        joints=[
+            # the spring is the strip's root: the hub and fixture turn on its motor side
+            LinearJoint(v["Ks1"], v["J11"], motor_damping=v["B11"], gear_ratio=v["Kg1"]),
+            LinearJoint(v["Ks2"], v["J21"], motor_damping=v["B21"], gear_ratio=v["Kg2"]),
+        ],
+        payload_mass=v["M22"],
+        payload_inertia=b["tip_load"],
         geometric_stiffening=False,
     )
 
 
 def beam_model(v: dict[str, float], n_modes: int = 2) -> fa.FlexibleArm:
-    """Both strips as Euler-Bernoulli links, stage 2 a body at strip 1's tip."""
+    """Both strips as Euler-Bernoulli links, stage 2's housing a body at strip 1's tip."""
+    b = _bodies(v)
     ei1 = v["Me"] * v["X1"] * v["T1"] ** 3 / 12.0
     ei2 = v["Me"] * v["X2"] * v["T2"] ** 3 / 12.0
-    rho1 = STEEL_DENSITY * v["X1"] * v["T1"]
-    rho2 = STEEL_DENSITY * v["X2"] * v["T2"]
-    tip_load = v["J22"] - v["M22"] * v["L2"] ** 2  # the tip load about its own centre
-    outboard = rho2 * v["L2"] ** 3 / 3.0 + v["M22"] * v["L2"] ** 2 + tip_load
-    hub2 = v["J12"] - v["M12"] * v["L1"] ** 2 - rho1 * v["L1"] ** 3 / 3.0 - outboard
     return fa.FlexibleArm(
         [
-            Link(v["L1"], ei1, rho1, n_modes=n_modes, hub_inertia=v["J1fix"]),
-            Link(v["L2"], ei2, rho2, n_modes=n_modes, hub_mass=v["M12"], hub_inertia=hub2),
+            Link(
+                v["L1"],
+                ei1,
+                b["rho1"],
+                n_modes=n_modes,
+                hub_inertia=v["J1fix"],
+                tip_mass=v["M12"],
+                tip_inertia=b["housing"],
+            ),
+            Link(v["L2"], ei2, b["rho2"], n_modes=n_modes, hub_inertia=v["J2fix"]),
         ],
         payload_mass=v["M22"],
-        payload_inertia=tip_load,
+        payload_inertia=b["tip_load"],
         geometric_stiffening=False,
     )
 

@@ -117,6 +117,19 @@ class ConfigReader:
         """Raise the file's error for an entry of the wrong type at ``key``."""
         raise self.type_error(self.source, key, reason)
 
+    def sections(self, data: object, allowed: tuple[str, ...] | None = None) -> Mapping[str, Any]:
+        """``data``, the whole file, if it is a table (else a type error); with ``allowed``,
+        an entry of another name is refused as an unknown section or key."""
+        if not isinstance(data, Mapping):
+            self.fail_type(None, f"must be a table of sections. Got {type(data).__name__} instead.")
+        if allowed is not None:
+            takes = f"{self.whole} takes {', '.join(allowed)}"
+            for name, value in data.items():
+                if name not in allowed:
+                    what = "section" if isinstance(value, Mapping) else "key"
+                    self.fail(None, f"unknown {what} '{name}' ({takes})")
+        return data
+
     def table(self, data: Mapping[str, Any], key: str, prefix: str = "") -> dict[str, Any]:
         """``data[key]`` (``{}`` if absent) as a table, else a type error naming it."""
         return self.as_table(data.get(key, {}), f"{prefix}{key}")

@@ -14,7 +14,7 @@ import math
 import os
 import secrets
 import shutil
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -36,31 +36,12 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     is removed and ``path`` is left untouched.
     """
     target = Path(path)
-    remove_stale(target)
-    tmp: Path | None = None
-    try:
-        while True:
-            # named before it is created: an interruption at any point finds it to remove
-            tmp = _temporary_name(target)
-            try:
-                os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
-                break
-            except FileExistsError:  # pragma: no cover - 32 random bits and our pid
-                tmp = None
+    with _temporary(target, _new_file, _remove_file) as tmp:
         yield tmp
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, target)
-    except BaseException:
-        if tmp is not None:
-            tmp.unlink(missing_ok=True)
-        raise
-
-
-def _temporary_name(target: Path) -> Path:
-    """``.{target}.{pid}.{random}.tmp`` beside ``target`` (see the module docstring)."""
-    return target.parent / f".{target.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
 
 
 @contextmanager
@@ -71,23 +52,51 @@ def output_directory(out: Path) -> Iterator[Path]:
     (``out`` may be an empty directory, which is replaced); on any error the
     temporary directory is removed and ``out`` is left as it was.
     """
-    remove_stale(out)
+    with _temporary(out, Path.mkdir, _remove_tree) as tmp:
+        yield tmp
+        os.replace(tmp, out)  # atomic; replaces an empty directory
+
+
+@contextmanager
+def _temporary(
+    target: Path, create: Callable[[Path], object], remove: Callable[[Path], None]
+) -> Iterator[Path]:
+    """Yield a new temporary beside ``target`` (made by ``create``, which raises
+    :class:`FileExistsError` if the name is taken), after removing the stale ones of
+    earlier writes; on any error, in the ``with`` block too, ``remove`` it."""
+    remove_stale(target)
     tmp: Path | None = None
     try:
         while True:
             # named before it is created: an interruption at any point finds it to remove
-            tmp = _temporary_name(out)
+            tmp = _temporary_name(target)
             try:
-                tmp.mkdir()
+                create(tmp)
                 break
             except FileExistsError:  # pragma: no cover - 32 random bits and our pid
                 tmp = None
         yield tmp
-        os.replace(tmp, out)  # atomic; replaces an empty directory
     except BaseException:
         if tmp is not None:
-            shutil.rmtree(tmp, ignore_errors=True)
+            remove(tmp)
         raise
+
+
+def _temporary_name(target: Path) -> Path:
+    """``.{target}.{pid}.{random}.tmp`` beside ``target`` (see the module docstring)."""
+    return target.parent / f".{target.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
+
+
+def _new_file(path: Path) -> None:
+    os.close(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+
+
+def _remove_file(path: Path) -> None:
+    path.unlink(missing_ok=True)
+
+
+def _remove_tree(path: Path) -> None:
+    shutil.rmtree(path, ignore_errors=True)
 
 
 def remove_stale(target: Path) -> list[Path]:

@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
+import signal
 from typing import Any
 
 import pytest
 
 from flexarm.cli import main
 
-__all__ = ["error_line", "help_text", "run", "strict_json"]
+__all__ = ["as_at_a_terminal", "error_line", "help_text", "run", "run_captured", "strict_json"]
 
 
 def run(capsys: Any, *argv: object) -> tuple[int, str, str]:
@@ -18,6 +21,15 @@ def run(capsys: Any, *argv: object) -> tuple[int, str, str]:
     status = main([str(a) for a in argv])
     out, err = capsys.readouterr()
     return status, out, err
+
+
+def run_captured(*argv: object) -> tuple[int, str, str]:
+    """:func:`run` without ``capsys`` (for a fixture wider than one test): the streams
+    redirected into strings."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        status = main([str(a) for a in argv])
+    return status, out.getvalue(), err.getvalue()
 
 
 def strict_json(text: str) -> Any:
@@ -43,3 +55,10 @@ def error_line(err: str) -> str:
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in err, err
     return lines[0]
+
+
+def as_at_a_terminal() -> None:
+    """``preexec_fn`` of a command a test interrupts: Ctrl-C handled as at a terminal.
+    A suite started in the background inherits SIGINT ignored (POSIX shells do that to
+    background jobs), and Python then leaves it ignored in the child."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)

@@ -19,18 +19,9 @@ from typing import TYPE_CHECKING
 
 from .._lazy import attach
 
-_SUBMODULES = ("config", "fit", "model", "records", "result", "units")
-_NAMES = {
-    "Calibration": "result",
-    "CalibrationConfig": "config",
-    "Parameter": "config",
-    "calibrate": "result",
-    "load_config": "config",
-}
+__getattr__, __dir__, __all__ = attach(__name__)
 
-__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
-
-if TYPE_CHECKING:  # what type checkers see; nothing is imported at run time
+if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
     from .config import CalibrationConfig as CalibrationConfig
     from .config import Parameter as Parameter
     from .config import load_config as load_config

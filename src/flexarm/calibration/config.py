@@ -196,9 +196,7 @@ class CalibrationConfig:
             directory); record files are relative to that data directory.
         """
         r = ConfigReader(source, CalibrationError, whole="a calibration file")
-        if not isinstance(data, Mapping):
-            r.fail_type(None, f"must be a table of sections. Got {type(data).__name__} instead.")
-        r.keys(data, "", SECTIONS)
+        r.keys(r.sections(data), "", SECTIONS)
         settings = _settings(r, r.table(data, "calibration"))
         tables: dict[str, TomlValue] = {
             "arm": copy_value(r.table(data, "arm")),

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from .._types import F64
 from .config import CalibrationConfig, Parameter
 from .model import Plant, Predictor, build_plant
 from .records import Record, load_record
@@ -43,7 +44,6 @@ __all__ = [
     "load_records",
 ]
 
-F64 = NDArray[np.float64]
 
 IDENTIFIABILITY_TOL = 1e-6
 """A parameter whose scaled sensitivity is below this fraction of the largest, or

@@ -22,9 +22,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from .._config import TomlValue, copy_value, set_key
+from .._types import F64
 from ..errors import CalibrationError, ConfigFileError, FlexarmError, UnstableStepError
 from ..model.arm import FlexibleArm
 from ..model.drives import Drive
@@ -38,8 +38,6 @@ from .config import OUTPUT_KINDS, CalibrationConfig
 from .records import Record
 
 __all__ = ["Plant", "Predictor", "build_plant", "check_plant"]
-
-F64 = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -25,8 +25,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._types import F64
 from ..errors import CalibrationError
 from .units import UNITS, to_si, unit_quantity
 
@@ -41,7 +41,6 @@ __all__ = [
     "load_record",
 ]
 
-F64 = NDArray[np.float64]
 
 INPUT_KINDS = {"angle": "angle", "torque": "torque", "current": "current"}
 """How a joint is driven -> the quantity its column measures: a prescribed angle

@@ -27,10 +27,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from .._config import TomlValue, copy_value, set_key
 from .._io import JSONValue, json_ready, output_directory
+from .._types import F64
 from ..errors import CalibrationError
 from ..model.damped_modes import DampedModes, damped_modes
 from .config import CalibrationConfig, load_config
@@ -42,8 +42,6 @@ if TYPE_CHECKING:
     from ..figures import FigureFormat
 
 __all__ = ["Calibration", "ChannelFit", "RecordFit", "calibrate", "toml_text"]
-
-F64 = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -49,6 +49,7 @@ def build_parser() -> argparse.ArgumentParser:
             "Model, simulate, control and identify flexible robot manipulators. "
             "Run 'flexarm COMMAND --help' for a command's options."
         ),
+        formatter_class=argparse.HelpFormatter,  # the description wrapped to the terminal
     )
     parser.add_argument("--version", action="version", version=f"flexarm {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 import errno
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from .._io import json_ready, output_directory, remove_stale
 from ..errors import InvalidValueError
@@ -29,6 +29,7 @@ __all__ = [
     "json_ready",
     "number",
     "output_directory",
+    "word_or_number",
 ]
 
 EXIT_FAILURE = 1  # the job failed (a simulation diverged), or the results could not be written
@@ -79,6 +80,22 @@ def number(
         if nonnegative and not value >= 0:
             raise argparse.ArgumentTypeError(f"must be >= 0. Got {text!r} instead.")
         return value
+
+    return parse
+
+
+def word_or_number(words: Iterable[str], expected: str) -> Callable[[str], str | float]:
+    """An ``argparse`` type: one of ``words``, or a number (checked by the library);
+    anything else is an error saying what is ``expected``."""
+    choices = tuple(words)
+
+    def parse(text: str) -> str | float:
+        if text in choices:
+            return text
+        try:
+            return float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be {expected}. Got {text!r} instead.") from None
 
     return parse
 
@@ -136,7 +153,13 @@ def figure_format(args: argparse.Namespace, prog: str, out: object = True) -> Fi
 
 
 class Parser(argparse.ArgumentParser):
-    """An argument parser whose errors are one line, not a usage dump."""
+    """An argument parser whose errors are one line, not a usage dump, and whose
+    description and epilog are printed as written (their line breaks kept), unless
+    ``formatter_class`` says otherwise."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", argparse.RawDescriptionHelpFormatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         raise UsageError(f"{self.prog}: error: {message}")

@@ -97,7 +97,7 @@ def _fit_data(args: argparse.Namespace) -> int:
     from ..ident.hammerstein.whiteness import IdentificationWarning
 
     t0 = time.perf_counter()
-    columns = given(args, x="x", y="y")
+    columns = given(args, "x", "y")
     seed = 0 if args.seed is None else args.seed
     with library_errors(PROG), warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentificationWarning)  # in the summary instead
@@ -109,12 +109,12 @@ def _fit_data(args: argparse.Namespace) -> int:
             y,
             **given(
                 args,
+                "order",
+                "method",
+                "bootstrap",
                 n_lags="lags",
-                order="order",
                 known_points="known",
-                method="method",
                 n_knots="knots",
-                bootstrap="bootstrap",
             ),
             rng=seed,
             u_label=str(columns.get("x", 0)),
@@ -157,7 +157,7 @@ def _robot(args: argparse.Namespace) -> int:
             design = design_dead_band_excitation(rng=pilot_rng)
             excitation = design.excitation
         else:
-            excitation = JointExcitation(**given(args, duration="duration"))
+            excitation = JointExcitation(**given(args, "duration"))
         res = identify_joint(
             excitation=excitation,
             torque_measurement=measurement,
@@ -281,13 +281,8 @@ stdout.
 
 def add_parser(isub: Any) -> None:
     """Add ``hammerstein`` to the ``identify`` subcommands ``isub``."""
-    p = isub.add_parser(
-        "hammerstein",
-        help="a Hammerstein model of DATA, or (without DATA) the robot-joint experiment",
-        description=_DESCRIPTION,
-        epilog=_EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    summary = "a Hammerstein model of DATA, or (without DATA) the robot-joint experiment"
+    p = isub.add_parser("hammerstein", help=summary, description=_DESCRIPTION, epilog=_EPILOG)
     p.add_argument("data", nargs="?", metavar="DATA", help="data file (.csv, .npz or text)")
     p.add_argument("--lags", type=positive_int(2), metavar="N", help="impulse response length (40)")
     p.add_argument(

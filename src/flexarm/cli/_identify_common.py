@@ -23,6 +23,7 @@ from ._common import (
     json_ready,
     number,
     output_directory,
+    word_or_number,
     write_failed,
 )
 
@@ -63,16 +64,10 @@ def library_errors(prog: str) -> Iterator[None]:
         raise UsageError(f"{prog}: error: {exc}") from None
 
 
-def parse_bandwidth(text: str) -> float | str:
-    """``--bandwidth``: a number (checked by the library) or a rule name."""
-    if text in BANDWIDTH_RULES:
-        return text
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"must be a number or one of {', '.join(BANDWIDTH_RULES)}. Got {text!r} instead."
-        ) from None
+parse_bandwidth = word_or_number(
+    BANDWIDTH_RULES, f"a number or one of {', '.join(BANDWIDTH_RULES)}"
+)
+"""``--bandwidth``: a number (checked by the library) or a rule name."""
 
 
 def positive_int(minimum: int) -> Callable[[str], int]:
@@ -85,9 +80,11 @@ def positive_int(minimum: int) -> Callable[[str], int]:
     return as_int
 
 
-def given(args: argparse.Namespace, **names: str) -> dict[str, Any]:
-    """``{parameter: value}`` of the options the user gave (``names``: parameter -> dest)."""
-    return {p: getattr(args, d) for p, d in names.items() if getattr(args, d) is not None}
+def given(args: argparse.Namespace, *same: str, **names: str) -> dict[str, Any]:
+    """``{parameter: value}`` of the options the user gave (``same``: parameters named as
+    their option's dest; ``names``: parameter -> dest)."""
+    dests = {**{name: name for name in same}, **names}
+    return {p: getattr(args, d) for p, d in dests.items() if getattr(args, d) is not None}
 
 
 def report(

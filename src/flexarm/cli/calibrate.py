@@ -47,17 +47,13 @@ stderr, naming the file and the key).
 
 def add_parser(sub: Any) -> None:
     """Add ``calibrate`` to the subcommands ``sub``."""
-    p = sub.add_parser(
-        "calibrate",
-        help="fit an arm's parameters to measured records",
-        description=(
-            "Calibrate an arm on measured runs: fit the parameters a calibration file "
-            "names by least squares on the free-run prediction of its training records, "
-            "and predict its validation records with the fitted arm."
-        ),
-        epilog=_EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+    summary = "fit an arm's parameters to measured records"
+    description = (
+        "Calibrate an arm on measured runs: fit the parameters a calibration file "
+        "names by least squares on the free-run prediction of its training records, "
+        "and predict its validation records with the fitted arm."
     )
+    p = sub.add_parser("calibrate", help=summary, description=description, epilog=_EPILOG)
     p.add_argument("config", metavar="CONFIG.toml", help="the calibration file")
     p.add_argument(
         "--data",

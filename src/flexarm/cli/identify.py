@@ -55,14 +55,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         res = fit_regression(
             x,
             y,
-            **given(
-                args,
-                kernel="kernel",
-                bandwidth="bandwidth",
-                decay="decay",
-                grid="grid",
-                binned="binned",
-            ),
+            **given(args, "kernel", "bandwidth", "decay", "grid", "binned"),
             series=args.series,
             x_label=str(args.x),
             y_label=str(args.y),
@@ -110,7 +103,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
     fmt = output_options(args, prog)
     t0 = time.perf_counter()
     with library_errors(prog):
-        sizes = given(args, n_min="n_min", n_max="n_max", steps="n_steps")
+        sizes = given(args, "n_min", "n_max", steps="n_steps")
         lo, hi = sizes.get("n_min", 250), sizes.get("n_max", 16000)  # sample_sizes' defaults
         if lo >= hi:
             which = "--n-max" if "n_max" in sizes else "--n-min"
@@ -122,15 +115,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
             args.function,
             n=sample_sizes(**sizes) if sizes else None,
             rng=np.random.default_rng(args.seed),
-            **given(
-                args,
-                repetitions="repetitions",
-                noise="noise",
-                distribution="distribution",
-                kernel="kernel",
-                bandwidth="bandwidth",
-                decay="decay",
-            ),
+            **given(args, "repetitions", "noise", "distribution", "kernel", "bandwidth", "decay"),
         )
     summary: dict[str, Any] = {
         "status": "ok",
@@ -238,29 +223,20 @@ def _add_output_options(p: argparse.ArgumentParser) -> None:
 
 def add_parser(sub: Any) -> None:
     """Add ``identify`` and its subcommands to the subcommands ``sub``."""
-    p = sub.add_parser(
-        "identify",
-        help="nonparametric identification: fit, study, hammerstein",
-        description=_DESCRIPTION,
-        epilog=_EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    summary = "nonparametric identification: fit, study, hammerstein"
+    p = sub.add_parser("identify", help=summary, description=_DESCRIPTION, epilog=_EPILOG)
     isub = p.add_subparsers(
         dest="identify_command",
         metavar="{fit,study,hammerstein}",
         parser_class=CommandParser,
         required=True,
     )
-    raw = argparse.RawDescriptionHelpFormatter
 
-    fit = isub.add_parser(
-        "fit",
-        help="m(x) = E[y | x] by eq. 14 from two columns of a data file",
-        description="Estimate m(x) = E[Y | X = x] (eq. 14, h_i = h_1 i^-decay) on a grid "
-        "spanning the inputs.",
-        epilog=_FIT_EPILOG,
-        formatter_class=raw,
+    summary = "m(x) = E[y | x] by eq. 14 from two columns of a data file"
+    description = (
+        "Estimate m(x) = E[Y | X = x] (eq. 14, h_i = h_1 i^-decay) on a grid spanning the inputs."
     )
+    fit = isub.add_parser("fit", help=summary, description=description, epilog=_FIT_EPILOG)
     fit.add_argument("data", metavar="DATA", help="data file (.csv, .npz or text)")
     fit.add_argument("--x", metavar="COL", default="0", help="input column (default 0)")
     fit.add_argument("--y", metavar="COL", default="1", help="output column (default 1)")
@@ -288,14 +264,12 @@ def add_parser(sub: Any) -> None:
     _add_output_options(fit)
     fit.set_defaults(func=_cmd_fit)
 
-    study = isub.add_parser(
-        "study",
-        help="convergence rate of eq. 14 by Monte Carlo",
-        description="Monte Carlo MISE of the semi-recursive estimate against n "
-        "(flexarm.ident.convergence_study).",
-        epilog=_STUDY_EPILOG,
-        formatter_class=raw,
+    summary = "convergence rate of eq. 14 by Monte Carlo"
+    description = (
+        "Monte Carlo MISE of the semi-recursive estimate against n "
+        "(flexarm.ident.convergence_study)."
     )
+    study = isub.add_parser("study", help=summary, description=description, epilog=_STUDY_EPILOG)
     study.add_argument(
         "--function", choices=REGRESSION_FUNCTIONS, default="smooth", help="m (default smooth)"
     )

@@ -159,6 +159,7 @@ def add_parser(sub: Any) -> None:
             "paper's arm (default) or of one link given by --length, --flexural-rigidity "
             "and --linear-density."
         ),
+        formatter_class=argparse.HelpFormatter,  # the description wrapped to the terminal
     )
     modes.add_argument(
         "--n-modes",

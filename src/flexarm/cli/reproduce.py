@@ -112,13 +112,8 @@ exit status: 0 success (runs that diverge are results, reported as such);
 
 def add_parser(sub: Any) -> None:
     """Add ``reproduce`` to the subcommands ``sub``."""
-    p = sub.add_parser(
-        "reproduce",
-        help="the paper's experiments: matrix, sensitivity study, report and claims",
-        description=_DESCRIPTION,
-        epilog=_EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    summary = "the paper's experiments: matrix, sensitivity study, report and claims"
+    p = sub.add_parser("reproduce", help=summary, description=_DESCRIPTION, epilog=_EPILOG)
     p.add_argument("--out", metavar="DIR", default="results", help="default ./results")
     p.add_argument("--json", action="store_true", help="print the JSON summary on stdout")
     p.add_argument(

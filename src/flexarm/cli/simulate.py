@@ -33,6 +33,7 @@ from ._common import (
     check_out,
     figure_format,
     json_ready,
+    word_or_number,
     write_failed,
 )
 
@@ -81,15 +82,7 @@ def _controller_option(text: str) -> str:
     )
 
 
-def _delay_option(text: str) -> str | float:
-    if text in DELAY_MODELS:
-        return text
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"must be a number of seconds (>= 0), 'seed' or 'dispersive'. Got {text!r} instead."
-        ) from None
+_delay_option = word_or_number(DELAY_MODELS, "a number of seconds (>= 0), 'seed' or 'dispersive'")
 
 
 def _overrides(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
@@ -332,12 +325,9 @@ and where the partial run is kept) or the results could not be written; 2 bad in
 
 def add_parser(sub: Any) -> None:
     """Add ``simulate`` to the subcommands ``sub``."""
+    summary = "simulate the closed loop (the paper's arm on the square by default)"
     sim = sub.add_parser(
-        "simulate",
-        help="simulate the closed loop (the paper's arm on the square by default)",
-        description=_SIMULATE_DESCRIPTION,
-        epilog=_SIMULATE_EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        "simulate", help=summary, description=_SIMULATE_DESCRIPTION, epilog=_SIMULATE_EPILOG
     )
     sim.add_argument("--scenario", metavar="FILE.toml", help="scenario file (TOML)")
     sim.add_argument(

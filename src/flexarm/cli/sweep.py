@@ -191,13 +191,8 @@ be written or a Dask task failed; 2 bad input (one line on stderr, nothing writt
 
 def add_parser(sub: Any) -> None:
     """Add ``sweep`` to the subcommands ``sub``."""
-    p = sub.add_parser(
-        "sweep",
-        help="a grid or Monte Carlo over scenario parameters: one table of runs",
-        description=_DESCRIPTION,
-        epilog=_EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    summary = "a grid or Monte Carlo over scenario parameters: one table of runs"
+    p = sub.add_parser("sweep", help=summary, description=_DESCRIPTION, epilog=_EPILOG)
     p.add_argument("sweep", metavar="SWEEP.toml", help="the sweep file (TOML)")
     p.add_argument("--out", metavar="DIR", help="output directory (default ./sweep_NAME)")
     p.add_argument(

@@ -15,25 +15,10 @@ from typing import TYPE_CHECKING
 from .._lazy import attach
 
 _SUBMODULES = ("adaptive", "controllers", "linearize", "shapers", "signals", "trajectories")
-_NAMES = {
-    "CompiledController": "controllers",
-    "Controller": "controllers",
-    "FuzzyAdaptiveJTPD": "adaptive",
-    "JacobianTransposePD": "controllers",
-    "JointPD": "controllers",
-    "Square": "trajectories",
-    "Circle": "trajectories",
-    "Line": "trajectories",
-    "PointToPoint": "trajectories",
-    "Waypoints": "trajectories",
-    "Trajectory": "trajectories",
-    "Shaper": "shapers",
-    "closed_loop_poles": "linearize",
-}
 
-__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
+__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES)
 
-if TYPE_CHECKING:  # what type checkers see; nothing is imported at run time
+if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
     from .adaptive import FuzzyAdaptiveJTPD as FuzzyAdaptiveJTPD
     from .controllers import CompiledController as CompiledController
     from .controllers import Controller as Controller

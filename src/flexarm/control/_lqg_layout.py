@@ -28,7 +28,8 @@ from typing import NamedTuple
 
 import numba as nb
 import numpy as np
-from numpy.typing import NDArray
+
+from .._types import F64
 
 __all__ = [
     "FUZZY",
@@ -47,7 +48,6 @@ __all__ = [
     "state_parts",
 ]
 
-F64 = NDArray[np.float64]
 
 NX, NY, N_GRID, POINT, GAIN, KS, LAMBDA0, FUZZY = range(8)
 """The header's slots: sizes, the point-sensor flag (1.0 or 0.0), the feedback gain,

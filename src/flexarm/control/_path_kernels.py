@@ -14,13 +14,12 @@ from collections.abc import Callable
 
 import numba as nb
 import numpy as np
-from numpy.typing import NDArray
 
+from .._types import F64
 from ._piecewise import quintic_scaling
 
 __all__ = ["path_point", "piecewise_path"]
 
-F64 = NDArray[np.float64]
 
 _quintic: Callable[[float], tuple[float, float, float]]
 _quintic = nb.njit(cache=True, nogil=True, inline="always")(quintic_scaling)  # type: ignore[assignment]

@@ -11,11 +11,11 @@ from __future__ import annotations
 from typing import TypeVar
 
 import numpy as np
-from numpy.typing import NDArray
+
+from .._types import F64
 
 __all__ = ["COMPILED_FROM", "piecewise_numpy", "quintic_scaling"]
 
-F64 = NDArray[np.float64]
 _T = TypeVar("_T", float, F64)
 
 COMPILED_FROM = 4096

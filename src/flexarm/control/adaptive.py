@@ -35,8 +35,9 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 from numba.core.ccallback import CFunc
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._types import F64
 from .._validation import check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..fuzzy import CompiledFuzzySystem, FuzzySystem, paper_system, workspace_size
@@ -57,7 +58,6 @@ from .signals import y_modes
 
 __all__ = ["ADAPTATION_LAWS", "FuzzyAdaptiveJTPD", "tip_deflections"]
 
-F64 = NDArray[np.float64]
 
 # params layout (all float64; integer arrays are stored bit for bit):
 #   [0:4] Kp (row-major 2x2), [4:8] Kd, [8:8+N] link lengths,

@@ -43,6 +43,7 @@ from numba.core.ccallback import CFunc
 from numpy.typing import ArrayLike, NDArray
 
 from .._compile import njit_runtime_free
+from .._types import F64
 from .._validation import check_array, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.kinematics import lever_lengths
@@ -74,7 +75,6 @@ __all__ = [
     "wrap_control_function",
 ]
 
-F64 = NDArray[np.float64]
 
 _P = types.CPointer(types.float64)  # type: ignore[no-untyped-call]
 CONTROL_SIGNATURE = types.void(

@@ -25,13 +25,12 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._types import F64
 from .._validation import check_array
 from ..errors import InvalidValueError
 from .statespace import StateSpace
 
 __all__ = ["Estimator", "Regulator", "check_detectable", "kalman", "lqr"]
-
-F64 = NDArray[np.float64]
 
 
 class Regulator(NamedTuple):

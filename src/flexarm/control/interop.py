@@ -30,8 +30,9 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._types import F64
 from .._validation import check_option
 from ..errors import InvalidTypeError
 from ..model.plant import Plant, check_plant
@@ -41,7 +42,6 @@ if TYPE_CHECKING:
 
 __all__ = ["NLSYS_OUTPUTS", "signal_names", "to_nlsys"]
 
-F64 = NDArray[np.float64]
 _OWNER = "to_nlsys"
 
 NLSYS_OUTPUTS = ("state", "joints", "tip")

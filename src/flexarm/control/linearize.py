@@ -42,6 +42,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._types import F64
 from .._validation import check_array, check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arm import FlexibleArm
@@ -72,7 +73,6 @@ __all__ = [
 
 OUTPUTS = ("sensor", "tip", "joints")
 
-F64 = NDArray[np.float64]
 _OWNER = "closed_loop_matrix"
 
 

@@ -55,8 +55,8 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 from numba.core.ccallback import CFunc
-from numpy.typing import NDArray
 
+from .._types import F64
 from .._validation import check_int, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..fuzzy import FuzzySystem, paper_system, workspace_size
@@ -97,7 +97,6 @@ from .signals import (
 
 __all__ = ["LQG", "closed_loop_growth", "lqg_law"]
 
-F64 = NDArray[np.float64]
 _OWNER = "LQG"
 
 

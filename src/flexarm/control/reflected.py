@@ -35,8 +35,9 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 from numba.core.ccallback import CFunc
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._types import F64
 from .._validation import check_real
 from ..errors import InvalidValueError
 from ..model.arm import FlexibleArm
@@ -55,7 +56,6 @@ from .signals import y_angles, y_point, y_point_rate, y_rates
 
 __all__ = ["ReflectedTipPD", "reflection_limit"]
 
-F64 = NDArray[np.float64]
 _OWNER = "ReflectedTipPD"
 
 

@@ -28,8 +28,8 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 from numba.core.ccallback import CFunc
-from numpy.typing import NDArray
 
+from .._types import F64
 from ..errors import InvalidValueError
 from ..model.arm import FlexibleArm
 from ..sensing.delays import discretize
@@ -39,7 +39,6 @@ from .linearize import linearize, measure, rest_state
 
 __all__ = ["LinearLoop", "SamplingCheck", "check_sampling", "linear_loop"]
 
-F64 = NDArray[np.float64]
 _TOLERANCE = 1e-6  # |z| up to 1 + this counts as marginal (rigid modes under no feedback)
 
 

@@ -17,15 +17,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._types import F64
 from .._validation import check_array, check_real
-from ..errors import InvalidTypeError, InvalidValueError
+from ..errors import InvalidValueError
+from ..sensing.delays import state_space_matrices
 
 if TYPE_CHECKING:
     import control
 
 __all__ = ["StateSpace"]
 
-F64 = NDArray[np.float64]
 C128 = NDArray[np.complex128]
 _OWNER = "StateSpace"
 
@@ -88,21 +89,9 @@ class StateSpace:
         input_names: Sequence[str] | None = None,
         output_names: Sequence[str] | None = None,
     ) -> None:
-        a = check_array(A, "A", _OWNER, shape=(-1, -1))
-        n = a.shape[0]
-        if a.shape != (n, n):
-            raise InvalidValueError(
-                f"The 'A' parameter of {_OWNER} must be square. Got shape {a.shape} instead."
-            )
-        b = check_array(B, "B", _OWNER, shape=(n, -1))
-        c = check_array(C, "C", _OWNER, shape=(-1, n))
-        m, p = b.shape[1], c.shape[0]
-        d = np.zeros((p, m)) if D is None else check_array(D, "D", _OWNER, shape=(p, m))
+        a, b, c, d = state_space_matrices(A, B, C, D, _OWNER)
+        n, m, p = a.shape[0], b.shape[1], c.shape[0]
         for name, arr in (("A", a), ("B", b), ("C", c), ("D", d)):
-            if arr.dtype.kind == "c":
-                raise InvalidTypeError(
-                    f"The '{name}' parameter of {_OWNER} must be real. Got complex instead."
-                )
             arr = np.array(arr, dtype=np.float64)
             arr.flags.writeable = False
             setattr(self, name, arr)

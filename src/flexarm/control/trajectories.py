@@ -135,13 +135,13 @@ def _piecewise(t: _F, knot_t: _F, knot_p: _F, quintic: bool) -> _Triple:
 
 
 # ------------------------------------------------------------------ paths
-class _StraightSegments:
-    """What the paths made of straight segments share: :meth:`evaluate` from their
-    knots (:meth:`_segments`, also what :func:`straight_segments` gives the loop)."""
+class _Path:
+    """What every path shares: :meth:`evaluate` checks the times and gives scalars for
+    a scalar ``t``; :meth:`_evaluate` computes the path at times of shape (m,)."""
 
-    def _segments(self) -> tuple[_F, _F, bool]:
-        """Knot times (k,) in s, knot points (k, 2) in m, and whether each segment
-        has quintic timing."""
+    def _evaluate(self, t: _F) -> _Triple:
+        """Position (m), velocity (m/s) and acceleration (m/s**2), each of shape
+        (m, 2), at the times ``t`` of shape (m,), s."""
         raise NotImplementedError
 
     def evaluate(self, t: ArrayLike) -> _Triple:
@@ -158,8 +158,21 @@ class _StraightSegments:
             In m, m/s and m/s**2.
         """
         tt, scalar = evaluation_times(t, f"{type(self).__name__}.evaluate")
+        return _shape_out(self._evaluate(tt), scalar)
+
+
+class _StraightSegments(_Path):
+    """What the paths made of straight segments share: the path from their knots
+    (:meth:`_segments`, also what :func:`straight_segments` gives the loop)."""
+
+    def _segments(self) -> tuple[_F, _F, bool]:
+        """Knot times (k,) in s, knot points (k, 2) in m, and whether each segment
+        has quintic timing."""
+        raise NotImplementedError
+
+    def _evaluate(self, t: _F) -> _Triple:
         knot_t, knot_p, quintic = self._segments()
-        return _shape_out(_piecewise(tt, knot_t, knot_p, quintic), scalar)
+        return _piecewise(t, knot_t, knot_p, quintic)
 
 
 @dataclass(frozen=True)
@@ -287,7 +300,7 @@ class Square(_StraightSegments):
 
 
 @dataclass(frozen=True)
-class Circle:
+class Circle(_Path):
     """A circle traced at constant angular speed.
 
     Parameters
@@ -344,20 +357,7 @@ class Circle:
         """Empty: a circle has no corners."""
         return ()
 
-    def evaluate(self, t: ArrayLike) -> _Triple:
-        """Position, velocity and acceleration at ``t``.
-
-        Parameters
-        ----------
-        t : float or array_like, shape (m,)
-            Time, s.
-
-        Returns
-        -------
-        position, velocity, acceleration : ndarray, shape (m, 2) or (2,)
-            In m, m/s and m/s**2.
-        """
-        tt, scalar = evaluation_times(t, f"{type(self).__name__}.evaluate")
+    def _evaluate(self, tt: _F) -> _Triple:
         omega = (2.0 * math.pi / self.period) * (1.0 if self.direction == "ccw" else -1.0)
         moving = ((tt >= 0.0) & (tt < self.duration))[:, None]
         angle = self.phase + omega * np.clip(tt, 0.0, self.duration)
@@ -366,7 +366,7 @@ class Circle:
         pos = np.asarray(self.center) + self.radius * radial
         vel = np.where(moving, self.radius * omega * tangent, 0.0)
         acc = np.where(moving, -self.radius * omega**2 * radial, 0.0)
-        return _shape_out((pos, vel, acc), scalar)
+        return pos, vel, acc
 
 
 @dataclass(frozen=True)
@@ -424,12 +424,8 @@ class Line(_StraightSegments):
 class PointToPoint(Line):
     """A rest-to-rest move: :class:`Line` with ``timing="quintic"`` fixed.
 
-    Parameters
-    ----------
-    start, end : array_like, shape (2,)
-        End points in m.
-    duration : float
-        Travel time in s (> 0).
+    It takes the parameters of :class:`Line` but ``timing``: ``start``, ``end`` (m)
+    and ``duration`` (s).
 
     Examples
     --------

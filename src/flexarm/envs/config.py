@@ -25,8 +25,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._types import F64
 from .._validation import check_array, check_int, check_option, check_real
 from ..control.trajectories import Square, Trajectory, check_trajectory
 from ..errors import InvalidTypeError, InvalidValueError
@@ -37,7 +37,6 @@ from ..sensing.sensors import JointSensor, Sensor, check_sensor
 
 __all__ = ["DEFAULT_TORQUE_LIMIT", "EnvConfig"]
 
-F64 = NDArray[np.float64]
 _OWNER = "EnvConfig"
 
 DEFAULT_TORQUE_LIMIT = 100.0

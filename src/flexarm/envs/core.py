@@ -14,8 +14,8 @@ import itertools
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._types import F64, I64
 from .._validation import check_int
 from ..errors import InvalidValueError
 from ..model.arrays import make_workspace
@@ -25,8 +25,6 @@ from .step import BatchState, EnvArrays, Scratch, reset_batch, step_batch
 
 __all__ = ["NOISE_BLOCK", "ArmBatch", "observation_bounds"]
 
-F64 = NDArray[np.float64]
-I64 = NDArray[np.int64]
 
 NOISE_BLOCK = 256
 """Rows of standard normal draws refilled at a time per arm (the stream of draws does

@@ -31,8 +31,9 @@ import dataclasses
 
 import gymnasium as gym
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from .._types import F64
 from ..errors import InvalidTypeError, InvalidValueError
 from .config import EnvConfig
 from .core import ArmBatch
@@ -40,7 +41,6 @@ from .step import DIVERGED, RUNNING, TRUNCATED
 
 __all__ = ["FlexibleArmEnv", "config_from", "step_info"]
 
-F64 = NDArray[np.float64]
 Info = dict[str, float | F64]
 
 

@@ -31,10 +31,8 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-import numpy as np
-from numpy.typing import NDArray
-
 from .._compile import njit_runtime_free
+from .._types import F64, I64
 from ..model.arrays import ArmArrays, Workspace
 from ..model.dynamics._points import point_kinematics
 from ..model.dynamics._two_links import is_two_links_one_mode
@@ -53,8 +51,6 @@ __all__ = [
     "step_batch",
 ]
 
-F64 = NDArray[np.float64]
-I64 = NDArray[np.int64]
 
 RUNNING, DIVERGED, TRUNCATED = 0, 1, 2
 """Status of an arm after a step: going on, terminated by divergence, at the episode's end."""

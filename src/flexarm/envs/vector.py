@@ -31,6 +31,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 from numpy.typing import ArrayLike, NDArray
 
+from .._types import F64
 from .._validation import check_int
 from ..errors import InvalidTypeError, InvalidValueError
 from .config import EnvConfig
@@ -40,7 +41,6 @@ from .step import DIVERGED, TRUNCATED
 
 __all__ = ["FlexibleArmVectorEnv"]
 
-F64 = NDArray[np.float64]
 VectorInfo = dict[str, object]
 
 

@@ -72,6 +72,7 @@ ZERO      PM    ZERO  PM
 P         PMAX  PM    PMAX
 ========  ====  ====  ====
 
+>>> from flexarm.fuzzy import paper_system
 >>> fls = paper_system()
 >>> round(float(fls(0.0, 0.0)), 12)
 0.166666666667
@@ -81,39 +82,30 @@ P         PMAX  PM    PMAX
 
 from __future__ import annotations
 
-from .compiled import CompiledFuzzySystem, evaluate, evaluate_into, evaluate_many, workspace_size
-from .paper import paper_system, plot_surface
-from .sets import (
-    Gaussian,
-    LeftShoulder,
-    MembershipFunction,
-    RightShoulder,
-    Rule,
-    Trapezoid,
-    Triangle,
-    Variable,
-)
-from .system import AGGREGATIONS, AND_OPERATORS, DEFUZZIFIERS, IMPLICATIONS, FuzzySystem
+from typing import TYPE_CHECKING
 
-__all__ = [
-    "AGGREGATIONS",
-    "AND_OPERATORS",
-    "DEFUZZIFIERS",
-    "IMPLICATIONS",
-    "CompiledFuzzySystem",
-    "FuzzySystem",
-    "Gaussian",
-    "LeftShoulder",
-    "MembershipFunction",
-    "RightShoulder",
-    "Rule",
-    "Trapezoid",
-    "Triangle",
-    "Variable",
-    "evaluate",
-    "evaluate_into",
-    "evaluate_many",
-    "paper_system",
-    "plot_surface",
-    "workspace_size",
-]
+from .._lazy import attach
+
+__getattr__, __dir__, __all__ = attach(__name__)
+
+if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
+    from .compiled import CompiledFuzzySystem as CompiledFuzzySystem
+    from .compiled import evaluate as evaluate
+    from .compiled import evaluate_into as evaluate_into
+    from .compiled import evaluate_many as evaluate_many
+    from .compiled import workspace_size as workspace_size
+    from .paper import paper_system as paper_system
+    from .paper import plot_surface as plot_surface
+    from .sets import Gaussian as Gaussian
+    from .sets import LeftShoulder as LeftShoulder
+    from .sets import MembershipFunction as MembershipFunction
+    from .sets import RightShoulder as RightShoulder
+    from .sets import Rule as Rule
+    from .sets import Trapezoid as Trapezoid
+    from .sets import Triangle as Triangle
+    from .sets import Variable as Variable
+    from .system import AGGREGATIONS as AGGREGATIONS
+    from .system import AND_OPERATORS as AND_OPERATORS
+    from .system import DEFUZZIFIERS as DEFUZZIFIERS
+    from .system import IMPLICATIONS as IMPLICATIONS
+    from .system import FuzzySystem as FuzzySystem

@@ -35,59 +35,9 @@ from typing import TYPE_CHECKING
 
 from .._lazy import attach
 
-_SUBMODULES = ("data", "fits", "hammerstein", "options", "regression")
-_NAMES = {
-    # choices
-    "KERNELS": "options",
-    "BANDWIDTH_RULES": "options",
-    # kernel regression
-    "Silverman": "regression.bandwidth",
-    "silverman_bandwidth": "regression.bandwidth",
-    "evaluate_kernel": "regression.kernels",
-    "NadarayaWatson": "regression.estimators",
-    "NotFittedError": "_estimator",
-    "RecursiveKernelRegression": "regression.estimators",
-    "SemiRecursiveKernelRegression": "regression.estimators",
-    "ConvergenceResult": "regression.convergence",
-    "convergence_study": "regression.convergence",
-    # Hammerstein systems and their identification, for any exciting input
-    "ARMA": "hammerstein.systems",
-    "EXAMPLE_ARMA": "hammerstein.systems",
-    "Cubic": "hammerstein.systems",
-    "DeadZone": "hammerstein.systems",
-    "HardLimiter": "hammerstein.systems",
-    "PiecewiseLinear": "hammerstein.systems",
-    "Quantizer": "hammerstein.systems",
-    "Saturation": "hammerstein.systems",
-    "Sign": "hammerstein.systems",
-    "simulate_hammerstein": "hammerstein.systems",
-    "ARMAFit": "hammerstein.solution",
-    "arma_from_impulse_response": "hammerstein.white.arma",
-    "two_point_normalisation": "hammerstein.solution",
-    "HammersteinIdentifier": "hammerstein.identifier",
-    "Bands": "hammerstein.bootstrap",
-    "Comparison": "hammerstein.comparison",
-    "IdentificationReport": "hammerstein.report",
-    "IdentificationWarning": "hammerstein.whiteness",
-    "LinearARX": "hammerstein.linear",
-    "Selection": "hammerstein.correlated.selection",
-    "WhitenessReport": "hammerstein.whiteness",
-    "fit_percent": "hammerstein.prediction",
-    "r2_score": "hammerstein.prediction",
-    "whiteness_test": "hammerstein.whiteness",
-    # data files and one-call fits
-    "DataError": "data",
-    "load_columns": "data",
-    "read_xy": "data",
-    "HammersteinFit": "fits",
-    "RegressionFit": "fits",
-    "fit_hammerstein": "fits",
-    "fit_regression": "fits",
-}
+__getattr__, __dir__, __all__ = attach(__name__)
 
-__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
-
-if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run time
+if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
     from ._estimator import NotFittedError as NotFittedError
     from .data import DataError as DataError
     from .data import load_columns as load_columns

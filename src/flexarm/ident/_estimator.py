@@ -46,6 +46,7 @@ __all__ = [
     "HyperParameters",
     "NotFittedError",
     "SavedEstimator",
+    "callable_output",
     "frozen_copy",
     "frozen_params",
     "same_value",
@@ -57,6 +58,25 @@ Arrays = dict[str, NDArray[Any]]
 
 class NotFittedError(ValueError, AttributeError):
     """Raised when an estimator is used before ``fit`` (as in scikit-learn)."""
+
+
+def callable_output(
+    value: Any, name: str, owner: str, shape: tuple[int, ...], expected: str
+) -> NDArray[np.float64]:
+    """What the user's callable ``name`` returned, as floats, checked: of ``shape`` (else
+    an error saying it must return ``expected``) and finite."""
+    w = np.asarray(value, dtype=np.float64)
+    if w.shape != shape:
+        raise InvalidValueError(
+            f"The '{name}' parameter of {owner} must return {expected}. "
+            f"Got shape {w.shape} instead."
+        )
+    if not np.all(np.isfinite(w)):
+        raise InvalidValueError(
+            f"The '{name}' parameter of {owner} must return finite values. "
+            "Got non-finite values instead."
+        )
+    return w
 
 
 def same_value(a: Any, b: Any) -> bool:

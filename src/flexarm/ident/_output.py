@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,7 +22,47 @@ from ..figures import SINGLE_COLUMN, FigureFormat, new_figure, save_figure, styl
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
 
-__all__ = ["output_directory", "save_axes_figure", "save_table_and_plot", "write_csv"]
+__all__ = [
+    "output_directory",
+    "save_axes_figure",
+    "save_docstring",
+    "save_table_and_plot",
+    "write_csv",
+]
+
+_Save = TypeVar("_Save", bound=Callable[..., list[Path]])
+
+_SAVE_DOC = """Write {files} into ``directory``.
+
+Each file is written atomically; the directory is created if needed.{note}
+
+Parameters
+----------
+directory : str or path-like
+figure_format : FigureFormat or str, optional
+    The figure's format and resolution (default PNG,
+    :class:`flexarm.figures.FigureFormat`): ``{figure}.pdf`` with ``"pdf"``.
+
+Returns
+-------
+list of Path
+    The files written{returns}.
+"""
+
+
+def save_docstring(
+    files: str, figure: str, note: str = "", returns: str = ""
+) -> Callable[[_Save], _Save]:
+    """Give a result's ``save(directory, *, figure_format=None)`` the docstring all of
+    them share: it writes ``files`` (reST), the figure ``figure`` (its stem) among them;
+    ``note`` follows the first paragraph, ``returns`` the description of the result."""
+
+    def decorate(save: _Save) -> _Save:
+        note_text = f"\n{note}" if note else ""
+        save.__doc__ = _SAVE_DOC.format(files=files, figure=figure, note=note_text, returns=returns)
+        return save
+
+    return decorate
 
 
 def output_directory(directory: str | os.PathLike[str]) -> Path:

@@ -26,13 +26,11 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._types import F64
 from ..errors import InvalidValueError
 
 __all__ = ["DataError", "load_columns", "read_xy"]
-
-F64 = NDArray[np.float64]
 
 
 class DataError(InvalidValueError):

@@ -23,9 +23,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._budget import check_memory
+from .._types import F64
 from .._validation import check_array, check_int
 from ..errors import InvalidValueError
 from ..figures import (
@@ -36,7 +37,7 @@ from ..figures import (
     save_figure,
     styled,
 )
-from ._output import output_directory, save_table_and_plot, write_csv
+from ._output import output_directory, save_docstring, save_table_and_plot, write_csv
 from .hammerstein.bootstrap import Bands
 from .hammerstein.identifier import DEFAULT_BANDWIDTH, HammersteinIdentifier
 from .hammerstein.solution import KnownPoints
@@ -50,7 +51,6 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["HammersteinFit", "RegressionFit", "fit_hammerstein", "fit_regression"]
 
-F64 = NDArray[np.float64]
 _DENSITY_ABOVE = 2000
 """Data drawn as points up to this many samples, as a density of hexagonal bins above
 (a cloud of thousands of points hides its own shape)."""
@@ -167,28 +167,13 @@ class RegressionFit:
         ax.legend(loc="best")
         return ax
 
+    @save_docstring("``estimate.csv`` (columns ``x,m``) and ``estimate.png``", "estimate")
     def save(
         self,
         directory: str | os.PathLike[str],
         *,
         figure_format: FigureFormat | str | None = None,
     ) -> list[Path]:
-        """Write ``estimate.csv`` (columns ``x,m``) and ``estimate.png`` into ``directory``.
-
-        Each file is written atomically; the directory is created if needed.
-
-        Parameters
-        ----------
-        directory : str or path-like
-        figure_format : FigureFormat or str, optional
-            The figure's format and resolution (default PNG,
-            :class:`flexarm.figures.FigureFormat`): ``estimate.pdf`` with ``"pdf"``.
-
-        Returns
-        -------
-        list of Path
-            The files written.
-        """
         table = ([self.grid, self.estimate], "x,m", "%.12g")
         return save_table_and_plot(directory, "estimate", table, self.plot, 2.6, figure_format)
 
@@ -403,28 +388,18 @@ class HammersteinFit:
         ax3.legend(loc="best")
         return fig
 
+    @save_docstring(
+        "``nonlinearity.csv`` (``u,phi``), ``impulse_response.csv``\n"
+        "(``lag,impulse_response``; with bands, ``u,phi,phi_low,phi_high`` and\n"
+        "``lag,impulse_response,low,high``) and ``hammerstein.png``",
+        "hammerstein",
+    )
     def save(
         self,
         directory: str | os.PathLike[str],
         *,
         figure_format: FigureFormat | str | None = None,
     ) -> list[Path]:
-        """Write ``nonlinearity.csv`` (``u,phi``), ``impulse_response.csv``
-        (``lag,impulse_response``; with bands, ``u,phi,phi_low,phi_high`` and
-        ``lag,impulse_response,low,high``) and ``hammerstein.png`` into ``directory``.
-
-        Parameters
-        ----------
-        directory : str or path-like
-        figure_format : FigureFormat or str, optional
-            The figure's format and resolution (default PNG,
-            :class:`flexarm.figures.FigureFormat`): ``hammerstein.svg`` with ``"svg"``.
-
-        Returns
-        -------
-        list of Path
-            The files written (atomically each; the directory is created if needed).
-        """
         out = output_directory(directory)
         ir = self.model.impulse_response_
         lags = np.arange(ir.shape[0], dtype=np.float64)

@@ -35,6 +35,9 @@ from .arrays import (
 
 __all__ = [
     "OK",
+    "STRIDED",
+    "address",
+    "contiguous",
     "own_mass",
     "pack_buffer",
     "rows_status",
@@ -58,8 +61,10 @@ HEADER = 4  # n_links, n_dof, n_joints, K; then mode_start (n_links + 1), all in
 # compiled code takes them as constants, so a cache built with other widths is stale.
 
 # Status codes of the entry points: 0 is success; otherwise 1 + 2 k + kind for
-# argument k of (q, dq, tau), kind 0 a wrong shape, 1 a non-finite entry.
+# argument k of (q, dq, tau), kind 0 a wrong shape, 1 a non-finite entry; or
+# STRIDED: an argument is not a contiguous, aligned vector (the caller converts).
 OK = 0
+STRIDED = -1
 
 
 def pack_buffer(arrays: ArmArrays) -> F64:
@@ -228,6 +233,27 @@ def own_mass(wbuf: F64, n: int) -> F64:  # pragma: no cover - compiled
     return mass
 
 
+def _address_typing(typingctx, x):  # type: ignore[no-untyped-def]
+    """The typing and code of :func:`address`: the address of ``x``'s first item."""
+
+    def codegen(context, builder, sig, args):  # type: ignore[no-untyped-def]
+        arr = make_array(sig.args[0])(context, builder, args[0])  # type: ignore[no-untyped-call]
+        return builder.ptrtoint(arr.data, context.get_value_type(nt.intp))
+
+    return nt.intp(x), codegen
+
+
+address: Any = intrinsic(_address_typing)
+
+
+@nb.njit(inline="always")
+def contiguous(x: F64) -> bool:  # pragma: no cover - compiled
+    """Whether the vector ``x`` is what its type says, contiguous and aligned: an
+    entry point called without Numba's dispatch (which would have refused
+    anything else) gets such arrays only if it checks."""
+    return x.strides[0] == 8 and address(x) % 8 == 0
+
+
 @nb.njit(inline="always")
 def vector_status(x: F64, n: int, arg: int) -> int:  # pragma: no cover - compiled
     """Status of one vector argument: shape ``(n,)`` and finite entries."""
@@ -253,7 +279,10 @@ def rows_status(x: F64, m: int, n: int, arg: int) -> int:  # pragma: no cover - 
 
 @nb.njit(inline="always")
 def state_status(q: F64, dq: F64, tau: F64, buf: F64) -> int:  # pragma: no cover - compiled
-    """Status of a state: ``q, dq`` of shape (n_dof,), ``tau`` (n_links,), finite."""
+    """Status of a state: ``q, dq`` of shape (n_dof,), ``tau`` (n_links,), finite;
+    :data:`STRIDED` first if one of them is not contiguous and aligned."""
+    if not (contiguous(q) and contiguous(dq) and contiguous(tau)):
+        return STRIDED
     n_links, n = sizes(buf)
     status = vector_status(q, n, 0)
     if status == OK:

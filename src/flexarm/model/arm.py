@@ -92,7 +92,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import (
     check_array,
-    check_int,
     check_option,
     check_real,
     check_sequence_of,
@@ -102,10 +101,11 @@ from ..errors import InvalidTypeError, InvalidValueError
 from .arrays import ArmArrays
 from .backends import Backends
 from .beam import NORMALIZATIONS, BeamModes
+from .drives import Drive, check_drives, drive_torques
 from .foreshortening import shortening_matrix
 from .gravity import check_gravity, gravity_forces, gravity_potential
-from .joints import FRICTION_SIDES, LinearJoint, NonlinearJoint, RigidJoint
-from .kinematics import RigidKinematics, deflected_point
+from .joints import FRICTION_SIDES, LinearJoint, NonlinearJoint, RigidJoint, check_joints
+from .kinematics import RigidKinematics
 from .lagrangian import body_terms, christoffel_matrix, mass_matrix_derivatives
 from .link import AnyLink, Link, RigidLink
 from .packing import outboard_loads, pack
@@ -128,13 +128,13 @@ AnyJoint = LinearJoint | NonlinearJoint | RigidJoint
 
 
 @dataclass(frozen=True)
-class FlexibleArm(Backends, RigidKinematics):
+class FlexibleArm(RigidKinematics, Backends):
     """A planar arm of ``N >= 1`` flexible links on revolute joints.
 
     Parameters
     ----------
     links : sequence of Link or RigidLink
-        From the base outwards (a :class:`RigidLink` has no modes).
+        From the base outwards (a :class:`~flexarm.model.link.RigidLink` has no modes).
     payload_mass : float
         Point mass at the last tip, kg (>= 0).
     payload_inertia : float
@@ -145,9 +145,10 @@ class FlexibleArm(Backends, RigidKinematics):
         ``"clamped-free"`` does not (user guide, "How many modes").
     joints : sequence of LinearJoint, NonlinearJoint or RigidJoint, optional
         One joint per link (None: rigid joints without rotors or friction).
-        Flexible joints add the motor angles to ``q``; :class:`RigidJoint` s add
-        their rotors, viscous and Makkar friction to the joint angles. An arm
-        takes flexible joints or rigid ones, not both.
+        Flexible joints add the motor angles to ``q``; rigid joints
+        (:class:`~flexarm.model.joints.RigidJoint`) add their rotors, viscous and
+        Makkar friction to the joint angles. An arm takes flexible joints or rigid
+        ones, not both.
     mode_normalization : {"mass", "amplitude", "tip"}
         Scaling of the mode shapes (:mod:`flexarm.modes`); default ``"mass"``.
     mode_amplitude : float
@@ -169,6 +170,12 @@ class FlexibleArm(Backends, RigidKinematics):
         plane of motion, m/s**2, e.g. ``(0, -9.81)`` for an arm in a vertical
         plane with ``y`` up (:mod:`flexarm.model.gravity`). None (default): a
         horizontal plane, no gravity terms at all.
+    drives : sequence of Drive or None, optional
+        One :class:`~flexarm.model.drives.Drive` (or None) per joint: the input of a
+        driven joint is its motor current (A), :meth:`joint_torques` turns the
+        inputs into the joint torques. The model takes the rotor from the joint
+        (give a geared rotor's ``N**2 J_r`` as its ``motor_inertia`` with
+        ``gear_ratio=N``), not from the drive.
 
     Examples
     --------
@@ -193,6 +200,7 @@ class FlexibleArm(Backends, RigidKinematics):
     rotor_coupling: bool = True
     geometric_stiffening: bool = True
     gravity: tuple[float, float] | None = None
+    drives: Sequence[Drive | None] | None = None
     _derived: dict[str, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -208,8 +216,10 @@ class FlexibleArm(Backends, RigidKinematics):
         validate_real_fields(self, _OWNER, nonnegative=("payload_mass", "payload_inertia"))
         check_option(self.boundary, "boundary", _OWNER, BOUNDARIES)
         if self.joints is not None:
-            set_(self, "joints", self._check_joints(self.joints, len(links)))
+            set_(self, "joints", check_joints(self.joints, len(links), _OWNER))
         check_option(self.joint_friction, "joint_friction", _OWNER, FRICTION_SIDES)
+        if self.drives is not None:
+            set_(self, "drives", check_drives(self.drives, len(links), _OWNER))
         for flag in ("rotor_coupling", "geometric_stiffening"):
             if not isinstance(getattr(self, flag), bool):
                 raise InvalidTypeError(
@@ -310,26 +320,29 @@ class FlexibleArm(Backends, RigidKinematics):
                 )
         return dataclasses.replace(self, links=links, **overrides)
 
-    @staticmethod
-    def _check_joints(joints: Any, n_links: int) -> tuple[AnyJoint, ...]:
-        what = "LinearJoint, NonlinearJoint or RigidJoint"
-        kinds = (LinearJoint, NonlinearJoint, RigidJoint)
-        joints = check_sequence_of(joints, "joints", _OWNER, kinds, what)
-        if len(joints) != n_links:
+    def joint_torques(self, inputs: ArrayLike) -> NDArray[np.float64]:
+        """The joint torques (N m) of joint inputs: a motor current (A) at a joint with
+        a :class:`~flexarm.model.drives.Drive` (:meth:`Drive.joint_torque`: less the
+        reading's offset, clipped to the amplifier's limit, times ``eta K_t N``), a
+        torque (N m) at a joint without one.
+
+        Parameters
+        ----------
+        inputs : array_like, shape (..., n_links)
+            One input per joint, in the joints' order.
+
+        Returns
+        -------
+        ndarray, shape (..., n_links)
+            N m, what :meth:`forward_dynamics` and the simulators take as ``tau``.
+        """
+        u = check_array(inputs, "inputs", f"{_OWNER}.joint_torques", real=True)
+        if u.ndim == 0 or u.shape[-1] != self.n_links:
             raise InvalidValueError(
-                f"The 'joints' parameter of {_OWNER} must hold one joint per link "
-                f"({n_links}). Got {len(joints)} instead."
+                f"The 'inputs' parameter of {_OWNER}.joint_torques must have {self.n_links} "
+                f"entries (one per joint) along its last axis. Got shape {u.shape} instead."
             )
-        rigid = [isinstance(jt, RigidJoint) for jt in joints]
-        if any(rigid) and not all(rigid):
-            raise InvalidValueError(
-                f"The 'joints' parameter of {_OWNER} must be all flexible joints "
-                "(LinearJoint, NonlinearJoint) or all RigidJoint: an arm mixing them is "
-                f"not modelled. Got rigid joints at {[i for i, r in enumerate(rigid) if r]} "
-                "instead (give those a stiff LinearJoint, or make every joint rigid)."
-            )
-        checked: tuple[AnyJoint, ...] = joints
-        return checked
+        return drive_torques(self.drives, u)
 
     # -------------------------------------------------------------- structure
     @property
@@ -344,7 +357,8 @@ class FlexibleArm(Backends, RigidKinematics):
     @property
     def has_flexible_joints(self) -> bool:
         """Whether the joints are flexible (a spring each): then ``q`` holds the
-        motor angles. Rigid joints (None, or :class:`RigidJoint`) have none."""
+        motor angles. Rigid joints (None, or
+        :class:`~flexarm.model.joints.RigidJoint`) have none."""
         return self.joints is not None and not isinstance(self.joints[0], RigidJoint)
 
     @property
@@ -456,15 +470,6 @@ class FlexibleArm(Backends, RigidKinematics):
         return b
 
     # ------------------------------------------------------------- validation
-    def _check_link(self, link: int) -> int:
-        link = check_int(link, "link", _OWNER, minimum=0)
-        if link >= self.n_links:
-            raise InvalidValueError(
-                f"The 'link' parameter of {_OWNER} must be < {self.n_links} (0-based). "
-                f"Got {link} instead."
-            )
-        return link
-
     def _check_q(self, q: ArrayLike, name: str = "q") -> NDArray[Any]:
         return check_array(q, name, _OWNER, shape=(self.n_dof,))
 
@@ -609,27 +614,6 @@ class FlexibleArm(Backends, RigidKinematics):
         return np.sqrt(np.clip(lam, 0.0, None))  # type: ignore[no-any-return]
 
     # -------------------------------------------------------------- kinematics
-    def _check_point(self, link: int, distance: float) -> tuple[int, float]:
-        """``link`` (0-based) and ``distance`` (m, in ``[0, L]``) checked."""
-        link = self._check_link(link)
-        L = self.links[link].length
-        distance = check_real(distance, "distance", _OWNER)
-        if not 0.0 <= distance <= L:
-            raise InvalidValueError(
-                f"The 'distance' parameter of {_OWNER} must lie in [0, {L}] for link {link}. "
-                f"Got {distance} instead."
-            )
-        return link, distance
-
-    def _point_position_numpy(
-        self, q: NDArray[Any], link: int, distance: float
-    ) -> NDArray[np.float64]:
-        """The NumPy reference of :meth:`point_position` (arguments checked)."""
-        phi = self.modes[link].shape(distance)[:, 0]
-        S = shortening_matrix(self.modes[link], distance)[:, :, 0]
-        pos = deflected_point(self.arrays, phi, np.atleast_2d(q), link, distance, S)
-        return pos[0] if q.ndim == 1 else pos
-
     def point_basis(self, link: int, distance: float) -> NDArray[np.float64]:
         """What the compiled :func:`flexarm.model.dynamics.point_kinematics` needs of a
         point: ``link``'s mode shapes at ``distance`` and, with geometric

@@ -122,7 +122,8 @@ class ArmArrays(NamedTuple):
         (a rigid link: its mass, first moment and inertia about the joint), the
         point mass at the joint (kg: its hub and the previous link's tip body),
         the rotary inertia of its tip body (kg m**2; the last link's is in
-        ``payload``), and a rigid joint's rotor (:class:`RigidJoint`) driving it:
+        ``payload``), and a rigid joint's rotor
+        (:class:`~flexarm.model.joints.RigidJoint`) driving it:
         ``J_m`` (kg m**2), coupling ``1 / N`` (0: uncoupled or no rotor), friction
         flag and Makkar ``g1..g6``.
     mass_integral, moment_integral, tip_deflection, tip_slope : float arrays, shape (n_dof,)

@@ -31,8 +31,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_option
+from ..errors import InvalidTypeError, InvalidValueError
 from .arrays import LEN, ArmArrays
-from .kernel_checks import checked_coordinates, checked_state
+from .beam import BeamModes
+from .kernel_checks import checked_coordinates, checked_state, shape_message
+from .kinematics import point_position_reference
 
 if TYPE_CHECKING:  # Numba is loaded on first use of the packed arm
     from .packed import PackedArm
@@ -42,6 +45,8 @@ __all__ = ["BACKENDS", "Backends"]
 BACKENDS = ("auto", "compiled", "numpy")
 
 _OWNER = "FlexibleArm"
+_FLOAT64 = np.dtype(np.float64)
+_empty = np.empty  # a global lookup less than np.empty in the calls' fast paths
 
 
 class Backends:
@@ -63,6 +68,10 @@ class Backends:
     def arrays(self) -> ArmArrays:
         raise NotImplementedError
 
+    @property
+    def modes(self) -> tuple[BeamModes, ...]:
+        raise NotImplementedError
+
     def point_basis(self, link: int, distance: float) -> NDArray[np.float64]:
         raise NotImplementedError
 
@@ -75,11 +84,6 @@ class Backends:
     def _forward_dynamics_numpy(
         self, q: NDArray[Any], dq: NDArray[Any], tau: NDArray[Any]
     ) -> NDArray[Any]:
-        raise NotImplementedError
-
-    def _point_position_numpy(
-        self, q: NDArray[Any], link: int, distance: float
-    ) -> NDArray[np.float64]:
         raise NotImplementedError
 
     def _packed(self) -> PackedArm:
@@ -129,7 +133,13 @@ class Backends:
         return self._packed().mass_matrix(q)  # type: ignore[return-value]
 
     def forward_dynamics(
-        self, q: ArrayLike, dq: ArrayLike, tau: ArrayLike, *, backend: str = "auto"
+        self,
+        q: ArrayLike,
+        dq: ArrayLike,
+        tau: ArrayLike,
+        *,
+        backend: str = "auto",
+        out: NDArray[Any] | None = None,
     ) -> NDArray[Any]:
         """Accelerations ``qddot = M^-1 (Q(q, dq, tau) - C dq)`` with ``Q`` from
         :meth:`generalized_forces`.
@@ -145,16 +155,22 @@ class Backends:
             ``"compiled"`` calls the Numba kernel
             :func:`flexarm.model.dynamics.forward_dynamics` (compiled on first
             use, cached on disk) through the arm's packed form
-            (:mod:`flexarm.model.packed`): about a microsecond from Python for
-            the paper's arm, equal to the kernel bit for bit; real input only.
+            (:mod:`flexarm.model.packed`): well under a microsecond from Python
+            for the paper's arm, equal to the kernel bit for bit; real input only.
             ``"numpy"`` is the readable reference. ``"auto"`` (default) is
             ``"compiled"`` for real input and ``"numpy"`` for complex input
             (complex-step differentiation).
+        out : ndarray, shape (n_dof,) or (m, n_dof), optional
+            Where to write the result (rad/s**2; modal units per s**2), which is
+            then returned: a writable array the result can be cast to safely. It
+            may be one of ``q, dq`` (the state is read before it is written). A
+            float64, C-contiguous ``out`` for one state saves the allocation of
+            a new array each call.
 
         Returns
         -------
         ndarray, shape (n_dof,) or (m, n_dof)
-            rad/s**2; modal units per s**2.
+            rad/s**2; modal units per s**2. ``out`` if given.
 
         Notes
         -----
@@ -166,15 +182,33 @@ class Backends:
                 packed: PackedArm = self._derived["packed"]
             except KeyError:
                 packed = self._packed()
-            out = packed.forward_dynamics(q, dq, tau)
-            if out is not None:
-                return out
+            try:  # one state, float64 vectors: PackedArm.forward_dynamics's first case, inline
+                if (
+                    out is None
+                    and q.dtype is _FLOAT64  # type: ignore[union-attr]
+                    and dq.dtype is _FLOAT64  # type: ignore[union-attr]
+                    and tau.dtype is _FLOAT64  # type: ignore[union-attr]
+                    and q.ndim == 1  # type: ignore[union-attr]
+                    and dq.ndim == 1  # type: ignore[union-attr]
+                    and tau.ndim == 1  # type: ignore[union-attr]
+                    and packed.on_stack
+                ):
+                    fresh = _empty(packed.n_dof)
+                    if not packed.entry(packed.buf, q, dq, tau, fresh):
+                        return fresh
+            except (AttributeError, TypeError):  # not arrays: checked below
+                pass
+            done = packed.forward_dynamics(q, dq, tau, out)
+            if done is not None:
+                return done
         check_option(backend, "backend", _OWNER, BACKENDS)
         n, real = self.n_dof, backend == "compiled"
         q, dq, tau = checked_state(q, dq, tau, n, self.n_links, real=real)
         if backend == "numpy" or "c" in (q.dtype.kind, dq.dtype.kind, tau.dtype.kind):
-            return _rows(self._forward_dynamics_numpy, q, dq, tau)
-        return self._packed().forward_dynamics(q, dq, tau)  # type: ignore[return-value]
+            result = _rows(self._forward_dynamics_numpy, q, dq, tau)
+        else:
+            result = self._packed().forward_dynamics(q, dq, tau)  # type: ignore[assignment]
+        return result if out is None else _into(out, result)
 
     def point_position(
         self, q: ArrayLike, link: int, distance: float, *, backend: str = "auto"
@@ -215,7 +249,7 @@ class Backends:
         link, distance = self._check_point(link, distance)
         q = checked_coordinates(q, self.n_dof, real=backend == "compiled")
         if backend == "numpy" or q.dtype.kind == "c":
-            return self._point_position_numpy(q, link, distance)
+            return point_position_reference(self.modes[link], self.arrays, q, link, distance)
         packed = self._packed()
         phi = packed.bases.get((link, distance))
         if phi is None:
@@ -239,6 +273,29 @@ class Backends:
                     return out
         last = self.n_links - 1
         return self.point_position(q, last, float(self.arrays.link[last, LEN]), backend=backend)
+
+
+def _into(out: object, result: NDArray[Any], name: str = "out") -> NDArray[Any]:
+    """``result`` written into ``out`` (checked: an ndarray of ``result``'s shape, writable,
+    of a dtype ``result`` casts to safely), which is returned."""
+    if not isinstance(out, np.ndarray):
+        raise InvalidTypeError(
+            f"The '{name}' parameter of {_OWNER} must be a NumPy array. "
+            f"Got {type(out).__name__} instead."
+        )
+    if out.shape != result.shape:
+        raise InvalidValueError(shape_message(name, _OWNER, str(result.shape), out.shape))
+    if not out.flags.writeable:
+        raise InvalidValueError(
+            f"The '{name}' parameter of {_OWNER} must be writable. Got a read-only array instead."
+        )
+    if not np.can_cast(result.dtype, out.dtype, "safe"):
+        raise InvalidTypeError(
+            f"The '{name}' parameter of {_OWNER} must have a dtype that {result.dtype} casts to "
+            f"safely. Got {out.dtype} instead."
+        )
+    out[...] = result
+    return out
 
 
 def _rows(fn: Callable[..., NDArray[Any]], *arrays: NDArray[Any]) -> NDArray[Any]:

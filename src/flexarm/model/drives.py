@@ -20,6 +20,7 @@ Examples
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import cast
 
@@ -27,9 +28,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_real
-from ..errors import InvalidValueError
+from ..errors import InvalidTypeError, InvalidValueError
 
-__all__ = ["Drive"]
+__all__ = ["Drive", "check_drives", "drive_torques"]
 
 F64 = NDArray[np.float64]
 
@@ -135,3 +136,37 @@ class Drive:
             )
         tm = check_array(motor_torque, "motor_torque", "Drive.joint_torque")
         return np.asarray(self.efficiency * self.gear_ratio * tm)
+
+
+def check_drives(drives: object, n_links: int, owner: str) -> tuple[Drive | None, ...]:
+    """``drives`` checked: a sequence of one :class:`Drive` (or None) per joint."""
+    if not isinstance(drives, Sequence) or isinstance(drives, str):
+        raise InvalidTypeError(
+            f"The 'drives' parameter of {owner} must be a sequence of Drive or None, "
+            f"one per joint. Got {type(drives).__name__} instead."
+        )
+    checked = tuple(drives)
+    for k, d in enumerate(checked):
+        if d is not None and not isinstance(d, Drive):
+            raise InvalidTypeError(
+                f"The 'drives' parameter of {owner} must hold Drive objects or None. "
+                f"Got {type(d).__name__} at position {k} instead."
+            )
+    if len(checked) != n_links:
+        raise InvalidValueError(
+            f"The 'drives' parameter of {owner} must hold one Drive (or None) per joint "
+            f"({n_links}). Got {len(checked)} instead."
+        )
+    return checked
+
+
+def drive_torques(
+    drives: Sequence[Drive | None] | None, inputs: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Joint torques (N m) of joint inputs, shape (..., n_joints): a current (A) where
+    ``drives`` has a :class:`Drive` (:meth:`Drive.joint_torque`), a torque elsewhere."""
+    out = np.array(inputs, dtype=float)
+    for j, d in enumerate(drives or ()):
+        if d is not None:
+            out[..., j] = d.joint_torque(current=inputs[..., j])
+    return out

@@ -76,7 +76,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_option, check_real, validate_real_fields
+from .._validation import check_option, check_real, check_sequence_of, validate_real_fields
 from ..errors import InvalidTypeError, InvalidValueError
 
 __all__ = [
@@ -87,6 +87,7 @@ __all__ = [
     "MakkarFriction",
     "NonlinearJoint",
     "RigidJoint",
+    "check_joints",
 ]
 
 FRICTION_SIDES = ("link", "motor")
@@ -450,3 +451,27 @@ def _check_friction(friction: object, owner: str) -> None:
             f"The 'friction' parameter of {owner} must be a MakkarFriction or None. "
             f"Got {type(friction).__name__} instead."
         )
+
+
+def check_joints(
+    joints: object, n_links: int, owner: str
+) -> tuple[LinearJoint | NonlinearJoint | RigidJoint, ...]:
+    """``joints`` checked: one joint per link, all flexible or all rigid."""
+    what = "LinearJoint, NonlinearJoint or RigidJoint"
+    kinds = (LinearJoint, NonlinearJoint, RigidJoint)
+    joints = check_sequence_of(joints, "joints", owner, kinds, what)
+    if len(joints) != n_links:
+        raise InvalidValueError(
+            f"The 'joints' parameter of {owner} must hold one joint per link "
+            f"({n_links}). Got {len(joints)} instead."
+        )
+    rigid = [isinstance(jt, RigidJoint) for jt in joints]
+    if any(rigid) and not all(rigid):
+        raise InvalidValueError(
+            f"The 'joints' parameter of {owner} must be all flexible joints "
+            "(LinearJoint, NonlinearJoint) or all RigidJoint: an arm mixing them is "
+            f"not modelled. Got rigid joints at {[i for i, r in enumerate(rigid) if r]} "
+            "instead (give those a stiff LinearJoint, or make every joint rigid)."
+        )
+    checked: tuple[LinearJoint | NonlinearJoint | RigidJoint, ...] = joints
+    return checked

@@ -17,13 +17,16 @@ so its Jacobian is that of the end effector with the *lever lengths*
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import check_array, check_option
+from .._validation import check_array, check_int, check_option, check_real
 from ..errors import InvalidValueError
 from .arrays import LEN, ArmArrays
+from .beam import BeamModes
+from .foreshortening import shortening_matrix
 
 __all__ = [
     "RigidKinematics",
@@ -186,6 +189,18 @@ def deflected_point(
     return pos
 
 
+def point_position_reference(
+    modes: BeamModes, arrays: ArmArrays, q: NDArray[Any], link: int, distance: float
+) -> NDArray[Any]:
+    """The NumPy reference of :meth:`flexarm.FlexibleArm.point_position` (arguments
+    checked; ``modes`` those of ``link``; ``q`` real or complex, shape (n_dof,) or
+    (m, n_dof))."""
+    phi = modes.shape(distance)[:, 0]
+    S = shortening_matrix(modes, distance)[:, :, 0]
+    pos = deflected_point(arrays, phi, np.atleast_2d(q), link, distance, S)
+    return pos[0] if q.ndim == 1 else pos
+
+
 class RigidKinematics:
     """The rigid-link kinematics of an arm from its link lengths: what encoders
     imply and the paper's controllers use (eqs. 9–10). A base of
@@ -201,6 +216,28 @@ class RigidKinematics:
     def link_lengths(self) -> F64:
         """Link lengths, m, shape ``(n_links,)``."""
         raise NotImplementedError
+
+    def _check_link(self, link: int) -> int:
+        """``link``, a 0-based link index, checked."""
+        link = check_int(link, "link", self._owner, minimum=0)
+        if link >= self.n_links:
+            raise InvalidValueError(
+                f"The 'link' parameter of {self._owner} must be < {self.n_links} (0-based). "
+                f"Got {link} instead."
+            )
+        return link
+
+    def _check_point(self, link: int, distance: float) -> tuple[int, float]:
+        """``link`` (0-based) and ``distance`` (m, in ``[0, L]``) checked."""
+        link = self._check_link(link)
+        length = float(self.link_lengths[link])
+        distance = check_real(distance, "distance", self._owner)
+        if not 0.0 <= distance <= length:
+            raise InvalidValueError(
+                f"The 'distance' parameter of {self._owner} must lie in [0, {length}] for "
+                f"link {link}. Got {distance} instead."
+            )
+        return link, distance
 
     def _check_theta(self, theta: ArrayLike) -> NDArray[np.float64]:
         arr = check_array(theta, "theta", self._owner)

@@ -25,7 +25,8 @@ themselves, so a wrong shape never reaches a kernel.
 Every state may also come as a batch: ``q`` of shape ``(m, n_dof)`` is ``m``
 states evaluated in one compiled call, each exactly as a call of its own.
 
-Threads: the kernels release the GIL and nothing they write is shared. The
+Threads: the kernels release the GIL (batches; one state from Python holds it, a
+call being shorter than the release) and nothing they write is shared. The
 packed buffer is never written; a call's workspace is its own, on the stack of
 the compiled entry point (up to :data:`STACK_FLOATS` values: arms of up to 17
 coordinates) or allocated by the call, so concurrent calls on one arm need no
@@ -35,7 +36,7 @@ lock. The kernels write every scratch value before reading it.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numba import types as nt
@@ -45,12 +46,15 @@ from .._compile import njit_runtime_free
 from ..errors import InvalidValueError
 from ._buffer import (
     OK,
+    STRIDED,
+    contiguous,
     own_mass,
     pack_buffer,
     rows_status,
     scratch,
     scratch_size,
     sizes,
+    stack,
     state_status,
     states_status,
     unpack,
@@ -94,15 +98,42 @@ _ENTRY = {"cache": True, "nogil": True}
 def _dynamics(buf: F64, q: F64, dq: F64, tau: F64, out: F64) -> int:  # pragma: no cover
     """:func:`flexarm.model.dynamics.forward_dynamics` of the packed arm into
     ``out[:n_dof]``; the workspace is ``out``'s tail if it has one of
-    :func:`scratch_size` values, else on this call's stack. Returns a status code
-    (0: done)."""
+    :func:`scratch_size` values, else on this call's stack. The accelerations
+    are computed on the stack and copied into ``out`` last, so ``out`` may
+    overlap the state. Returns a status code (0: done)."""
     status = state_status(q, dq, tau, buf)
+    if status == OK and not contiguous(out):
+        status = STRIDED
     if status == OK:
         n = q.shape[0]
         wbuf = scratch(out, n, scratch_size(n))
         ws = workspace(wbuf, n, own_mass(wbuf, n))
-        forward_dynamics(q, dq, tau, unpack(buf), ws, view(out, 0, (n,), np.float64))
+        ddq = stack(n)
+        forward_dynamics(q, dq, tau, unpack(buf), ws, ddq)
+        for r in range(n):
+            out[r] = ddq[r]
     return status
+
+
+def _compiled(dispatcher: Any) -> Any:
+    """The compiled function behind ``dispatcher`` (compiled for one signature),
+    which unboxes its arguments without typing them first; the dispatcher itself
+    where there is no such function (``NUMBA_DISABLE_JIT``)."""
+    overloads = getattr(dispatcher, "overloads", None)
+    if not overloads or len(overloads) != 1:
+        return dispatcher
+    return next(iter(overloads.values())).entry_point
+
+
+@njit_runtime_free([nt.int64(_F1, _F1, _F1, _F1, _F1)], cache=True)
+def _dynamics_held(buf: F64, q: F64, dq: F64, tau: F64, out: F64) -> int:  # pragma: no cover
+    """:func:`_dynamics` holding the GIL: the entry of one state from Python, where
+    releasing and taking back the GIL would add some 35 ns (more under load) to a
+    call of well under a microsecond. Batches release it (:func:`_dynamics_rows`)."""
+    return _dynamics(buf, q, dq, tau, out)
+
+
+_dynamics_entry = _compiled(_dynamics_held)
 
 
 @njit_runtime_free([nt.int64(_F1, _F1, _F2, _F2, _F2, _F2)], **_ENTRY)
@@ -201,6 +232,13 @@ class PackedArm:
     on_stack : bool
         Whether a workspace fits on a call's stack (:data:`STACK_FLOATS`);
         otherwise each call allocates it with its output.
+    vector : tuple of int
+        ``(n_dof,)``, the shape of the accelerations of one state.
+    entry : callable
+        ``entry(buf, q, dq, tau, out) -> status`` for one state, the compiled
+        function behind the dispatcher of the dynamics (no typing of the
+        arguments: float64 vectors only, checked by the caller; their layout
+        checked inside, :data:`flexarm.model._buffer.STRIDED`).
     square : tuple of int
         ``(n_dof, n_dof)``, the shape of a mass matrix.
     tall : tuple of int
@@ -217,17 +255,20 @@ class PackedArm:
     tip_distance: float
     scratch: int = field(init=False, repr=False)
     on_stack: bool = field(init=False, repr=False)
+    vector: tuple[int] = field(init=False, repr=False)
     square: tuple[int, int] = field(init=False, repr=False)
     tall: tuple[int, int] = field(init=False, repr=False)
     bases: dict[tuple[int, float], F64] = field(default_factory=dict, repr=False)
 
     MAX_BASES = 64
+    entry: ClassVar[Any] = staticmethod(_dynamics_entry)  # a class attribute: pickles
 
     def __post_init__(self) -> None:
         scratch = workspace_size(self.n_dof)
         object.__setattr__(self, "scratch", scratch)
         object.__setattr__(self, "on_stack", scratch <= STACK_FLOATS)
         n = self.n_dof
+        object.__setattr__(self, "vector", (n,))
         object.__setattr__(self, "square", (n, n))
         object.__setattr__(self, "tall", (n + -(-scratch // n), n))
 
@@ -250,8 +291,10 @@ class PackedArm:
     # ----------------------------------------------------------------- calls
     # The guards read ``dtype`` (a list has none: AttributeError) and leave the
     # rest to the compiled entry points' signatures (a strided, read-only or 3-D
-    # array: TypeError): a few tens of ns of a call of some 600.
-    def forward_dynamics(self, q: Any, dq: Any, tau: Any) -> F64 | None:
+    # array: TypeError): a few tens of ns of a call of some 600. One state goes to
+    # ``entry``, which has no signature to refuse with: ``ndim`` is checked here
+    # (unboxing writes that many shapes), the layout inside (STRIDED).
+    def forward_dynamics(self, q: Any, dq: Any, tau: Any, out: Any = None) -> F64 | None:
         """``qddot`` of :func:`flexarm.model.dynamics.forward_dynamics`.
 
         Parameters
@@ -260,13 +303,17 @@ class PackedArm:
             Coordinates and rates (rad, rad/s; modal units), float64.
         tau : ndarray, shape (n_links,) or (m, n_links)
             Joint (motor) torques, N m, float64.
+        out : ndarray, shape (n_dof,), optional
+            Where to write the accelerations of one state: a writable,
+            C-contiguous float64 array (it may be one of the state's arrays).
 
         Returns
         -------
         ndarray, shape (n_dof,) or (m, n_dof), or None
-            The accelerations (rad/s**2; modal units); None if the arguments
-            are not C-contiguous, writable float64 NumPy arrays of one number
-            of dimensions (1 or 2).
+            The accelerations (rad/s**2; modal units), ``out`` if given; None if
+            the arguments are not C-contiguous, aligned float64 NumPy arrays of
+            one number of dimensions (1 or 2), or ``out`` is given and is not
+            such an array of shape (n_dof,) or the state is a batch.
 
         Raises
         ------
@@ -276,23 +323,36 @@ class PackedArm:
         try:
             if q.dtype is not _FLOAT64 or dq.dtype is not _FLOAT64 or tau.dtype is not _FLOAT64:
                 return None
-            if q.ndim == 1:
-                if self.on_stack:
+            if q.ndim == 1 and dq.ndim == 1 and tau.ndim == 1 and self.on_stack:
+                # One state, the common case: the compiled function behind the
+                # dispatcher, called directly (the dispatcher's typing of five
+                # arrays is a fifth of a call). What that typing guarded, the
+                # float64 vectors checked just above and their layout checked by
+                # the entry point itself (STRIDED), so nothing else reaches it.
+                if out is None:
                     out = _empty(self.n_dof)
-                    status = _dynamics(self.buf, q, dq, tau, out)
-                else:  # the workspace in the output's tail, the result copied out
-                    big = _empty(self.n_dof + self.scratch)
-                    status = _dynamics(self.buf, q, dq, tau, big)
-                    out = big[: self.n_dof].copy()
+                elif not (
+                    out.dtype is _FLOAT64 and out.shape == self.vector and out.flags.writeable
+                ):
+                    return None
+                status = self.entry(self.buf, q, dq, tau, out)
+            elif out is not None:
+                return None
+            elif q.ndim == 1:  # the workspace in the output's tail, the result copied out
+                big = _empty(self.n_dof + self.scratch)
+                status = _dynamics(self.buf, q, dq, tau, big)
+                out = big[: self.n_dof].copy()
             else:
                 row = _empty(self.n_dof if self.on_stack else self.n_dof + self.scratch)
                 out = _empty((q.shape[0], self.n_dof))
                 status = _dynamics_rows(self.buf, row, q, dq, tau, out)
-        except (AttributeError, TypeError):  # not arrays, strided, read-only, mixed
+        except (AttributeError, TypeError, IndexError):  # not arrays, strided, mixed, 0-d
             return None
         if status:
+            if status == STRIDED:
+                return None
             self._fail(status, q, dq, tau)
-        return out
+        return out  # type: ignore[no-any-return]
 
     def mass_matrix(self, q: Any) -> F64 | None:
         """``M(q)`` of :func:`flexarm.model.dynamics.mass_and_bias`.

@@ -11,17 +11,10 @@ from typing import TYPE_CHECKING
 from .._lazy import attach
 
 _SUBMODULES = ("delays", "sensors")
-_NAMES = {
-    "DelayModel": "delays",
-    "JointSensor": "sensors",
-    "PointSensor": "sensors",
-    "Sensor": "sensors",
-    "TipSensor": "sensors",
-}
 
-__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
+__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES)
 
-if TYPE_CHECKING:  # what type checkers see; nothing is imported at run time
+if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
     from .delays import DelayModel as DelayModel
     from .sensors import JointSensor as JointSensor
     from .sensors import PointSensor as PointSensor

@@ -22,8 +22,8 @@ from typing import NamedTuple
 
 import numba as nb
 import numpy as np
-from numpy.typing import NDArray
 
+from .._types import F64, I64
 from ..model.arrays import ArmArrays
 from ..model.dynamics._points import point_kinematics
 
@@ -38,9 +38,6 @@ __all__ = [
     "rigid_chain_point",
     "sense",
 ]
-
-F64 = NDArray[np.float64]
-I64 = NDArray[np.int64]
 
 
 class SensorArrays(NamedTuple):

@@ -22,9 +22,9 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numpy.typing import NDArray
 
 from .._compile import compiled_as
+from .._types import F64
 from ..errors import InvalidValueError
 from ..model.arrays import ArmArrays
 from ..model.kernel_checks import check_model, check_vector
@@ -44,7 +44,6 @@ __all__ = [
     "sensor_arrays",
 ]
 
-F64 = NDArray[np.float64]
 
 SensorArrays.__doc__ = """The sensor and its delay as plain arrays (build with
 :func:`sensor_arrays` or :func:`channel_arrays`).

@@ -92,6 +92,7 @@ __all__ = [
     "discretize",
     "pade",
     "pade_state_space",
+    "state_space_matrices",
     "travel_delay",
     "wave_delay",
 ]
@@ -209,6 +210,29 @@ def pade_state_space(delay: float, order: int) -> tuple[_F, _F, _F, _F]:
     return a / t, bb / root_t, cc / root_t, np.array([[sign]])
 
 
+def state_space_matrices(
+    A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike | None, owner: str
+) -> tuple[_F, _F, _F, _F]:
+    """``A`` (n, n), ``B`` (n, m), ``C`` (p, n) and ``D`` (p, m; zeros if None) of a
+    state-space system, checked for ``owner``: real, and of shapes that fit together."""
+    a = check_array(A, "A", owner, shape=(-1, -1))
+    n = a.shape[0]
+    if a.shape != (n, n):
+        raise InvalidValueError(
+            f"The 'A' parameter of {owner} must be square. Got shape {a.shape} instead."
+        )
+    b = check_array(B, "B", owner, shape=(n, -1))
+    c = check_array(C, "C", owner, shape=(-1, n))
+    m, p = b.shape[1], c.shape[0]
+    d = np.zeros((p, m)) if D is None else check_array(D, "D", owner, shape=(p, m))
+    for name, arr in (("A", a), ("B", b), ("C", c), ("D", d)):
+        if arr.dtype.kind == "c":
+            raise InvalidTypeError(
+                f"The '{name}' parameter of {owner} must be real. Got complex instead."
+            )
+    return a, b, c, d
+
+
 def discretize(
     A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, dt: float
 ) -> tuple[_F, _F, _F, _F]:
@@ -248,22 +272,8 @@ def discretize(
     (0.367879, 0.632121)
     """
     owner = "discretize"
-    a = check_array(A, "A", owner, shape=(-1, -1))
-    n = a.shape[0]
-    if a.shape != (n, n):
-        raise InvalidValueError(
-            f"The 'A' parameter of {owner} must be square. Got shape {a.shape} instead."
-        )
-    b = check_array(B, "B", owner, shape=(n, -1))
-    m = b.shape[1]
-    c = check_array(C, "C", owner, shape=(-1, n))
-    p = c.shape[0]
-    dd = check_array(D, "D", owner, shape=(p, m))
-    for name, arr in (("A", a), ("B", b), ("C", c), ("D", dd)):
-        if arr.dtype.kind == "c":
-            raise InvalidTypeError(
-                f"The '{name}' parameter of {owner} must be real. Got complex instead."
-            )
+    a, b, c, dd = state_space_matrices(A, B, C, D, owner)
+    n, m = b.shape
     h = check_real(dt, "dt", owner, positive=True)
     big = np.zeros((n + m, n + m))
     big[:n, :n] = a

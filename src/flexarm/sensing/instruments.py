@@ -28,11 +28,11 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import ClassVar, Protocol
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._types import F64
 from .._validation import check_array, check_int, check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arm import FlexibleArm
@@ -48,7 +48,6 @@ __all__ = [
     "measure",
 ]
 
-F64 = NDArray[np.float64]
 GAUGE_FORMS = ("strain", "tip_angle")
 """What a strain gauge reports: the strain, or the vendor's tip-angle form of it."""
 
@@ -73,15 +72,28 @@ def delayed(t: F64, signal: F64, delay: float) -> F64:
 
 
 class _Channel:
-    """The shared part: checks, the delay and the quantum."""
+    """The shared part: the joint or link read (the field :attr:`_index` names), the
+    delay and the quantum, their checks."""
 
+    _index: ClassVar[str]  # "joint" or "link"
     delay: float
     quantum: float
 
-    def _check_common(self, owner: str) -> None:
-        set_ = object.__setattr__
+    def __post_init__(self) -> None:
+        owner, index, set_ = type(self).__name__, self._index, object.__setattr__
+        set_(self, index, check_int(getattr(self, index), index, owner, minimum=0))
         set_(self, "delay", check_real(self.delay, "delay", owner, nonnegative=True))
         set_(self, "quantum", check_real(self.quantum, "quantum", owner, nonnegative=True))
+
+    def _index_in(self, arm: FlexibleArm) -> int:
+        """The joint or link read, checked against ``arm``."""
+        index: int = getattr(self, self._index)
+        if index >= arm.n_links:
+            raise InvalidValueError(
+                f"The '{self._index}' parameter of {type(self).__name__} must be a "
+                f"{self._index} of the arm (< {arm.n_links}). Got {index} instead."
+            )
+        return index
 
     def raw(self, arm: FlexibleArm, q: F64) -> F64:  # pragma: no cover - interface
         raise NotImplementedError
@@ -102,17 +114,18 @@ class _Channel:
         return value
 
 
-def _joint(arm: FlexibleArm, joint: int, owner: str) -> int:
-    if joint >= arm.n_links:
-        raise InvalidValueError(
-            f"The 'joint' parameter of {owner} must be a joint of the arm (< {arm.n_links}). "
-            f"Got {joint} instead."
-        )
-    return joint
+@dataclass(frozen=True)
+class _JointChannel(_Channel):
+    """A channel of one joint (:class:`Encoder`, :class:`JointDeflection`)."""
+
+    _index = "joint"
+    joint: int
+    quantum: float = 0.0
+    delay: float = 0.0
 
 
 @dataclass(frozen=True)
-class Encoder(_Channel):
+class Encoder(_JointChannel):
     """A joint's encoder: the motor angle with flexible joints, else the joint angle.
 
     Parameters
@@ -126,24 +139,16 @@ class Encoder(_Channel):
         Pure delay of the channel, s (>= 0).
     """
 
-    joint: int
-    quantum: float = 0.0
-    delay: float = 0.0
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "joint", check_int(self.joint, "joint", "Encoder", minimum=0))
-        self._check_common("Encoder")
-
     def raw(self, arm: FlexibleArm, q: F64) -> F64:
         """The encoder angle of every row of ``q`` (rad), undelayed and unrounded."""
-        j = _joint(arm, self.joint, "Encoder")
+        j = self._index_in(arm)
         if arm.has_flexible_joints:
             return np.ascontiguousarray(q[:, arm.motor_slice][:, j])
         return np.ascontiguousarray(q[:, j])
 
 
 @dataclass(frozen=True)
-class JointDeflection(_Channel):
+class JointDeflection(_JointChannel):
     """The link's angle relative to its motor across a flexible joint, ``q - q_m``.
 
     Parameters
@@ -154,33 +159,15 @@ class JointDeflection(_Channel):
         As for :class:`Encoder` (rad, s).
     """
 
-    joint: int
-    quantum: float = 0.0
-    delay: float = 0.0
-
-    def __post_init__(self) -> None:
-        owner = "JointDeflection"
-        object.__setattr__(self, "joint", check_int(self.joint, "joint", owner, minimum=0))
-        self._check_common(owner)
-
     def raw(self, arm: FlexibleArm, q: F64) -> F64:
         """``q - q_m`` of the joint for every row of ``q`` (rad)."""
-        j = _joint(arm, self.joint, "JointDeflection")
+        j = self._index_in(arm)
         if not arm.has_flexible_joints:
             raise InvalidValueError(
                 "The 'arm' parameter of JointDeflection must have flexible joints (a rigid "
                 "joint does not deflect)."
             )
         return np.ascontiguousarray(q[:, j] - q[:, arm.motor_slice][:, j])
-
-
-def _link_modes(arm: FlexibleArm, link: int, owner: str) -> int:
-    if link >= arm.n_links:
-        raise InvalidValueError(
-            f"The 'link' parameter of {owner} must be a link of the arm (< {arm.n_links}). "
-            f"Got {link} instead."
-        )
-    return link
 
 
 @dataclass(frozen=True)
@@ -205,6 +192,7 @@ class StrainGauge(_Channel):
         As for :class:`Encoder` (in the unit of ``form``; s).
     """
 
+    _index = "link"
     link: int
     position: float = 0.0
     thickness: float = 1e-3
@@ -213,18 +201,16 @@ class StrainGauge(_Channel):
     delay: float = 0.0
 
     def __post_init__(self) -> None:
-        owner = "StrainGauge"
-        set_ = object.__setattr__
-        set_(self, "link", check_int(self.link, "link", owner, minimum=0))
+        super().__post_init__()
+        owner, set_ = "StrainGauge", object.__setattr__
         set_(self, "position", check_real(self.position, "position", owner, nonnegative=True))
         set_(self, "thickness", check_real(self.thickness, "thickness", owner, positive=True))
         check_option(self.form, "form", owner, GAUGE_FORMS)
-        self._check_common(owner)
 
     def gain(self, arm: FlexibleArm) -> F64:
         """The channel per modal coordinate of the link, shape (n_modes of the link,):
         ``(T / 2) phi_j''(x)``, times ``2 L / (3 T)`` in the tip-angle form."""
-        link = _link_modes(arm, self.link, "StrainGauge")
+        link = self._index_in(arm)
         length = float(arm.link_lengths[link])
         if self.position > length:
             raise InvalidValueError(
@@ -257,17 +243,14 @@ class TipAngle(_Channel):
         As for :class:`Encoder` (rad, s).
     """
 
+    _index = "link"
     link: int
     quantum: float = 0.0
     delay: float = 0.0
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "link", check_int(self.link, "link", "TipAngle", minimum=0))
-        self._check_common("TipAngle")
-
     def raw(self, arm: FlexibleArm, q: F64) -> F64:
         """``w(L) / L`` of the link for every row of ``q`` (rad)."""
-        link = _link_modes(arm, self.link, "TipAngle")
+        link = self._index_in(arm)
         if arm.n_modes[link] == 0:
             return np.zeros(q.shape[0])
         length = float(arm.link_lengths[link])

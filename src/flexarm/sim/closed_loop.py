@@ -571,6 +571,8 @@ def _hubless_note(arm: FlexibleArm) -> str:
     paper's idealisation: every loop closed on it is stiff)."""
     if arm.has_flexible_joints or any(link.hub_inertia > 0 for link in arm.links):
         return ""
+    if any(jt.motor_inertia > 0 for jt in arm.joints or ()):  # rigid joints' rotors
+        return ""
     return (
         " (the arm has no hub inertia, the paper's idealisation, which makes every loop "
         "closed on it stiff: on the paper's links the paper's PD has poles down to about "

@@ -299,7 +299,10 @@ def _link(r: ScenarioReader, t: Mapping[str, Any], prefix: str) -> Link | RigidL
     """``[[arm.links]]``: a flexible :class:`Link` (``kind = "flexible"``, the default)
     or a :class:`RigidLink` (``kind = "rigid"``)."""
     kind = r.kind(t, prefix, LINK_KINDS, default="flexible")
-    return r.build(Link if kind == "flexible" else RigidLink, t, prefix, kind=True)
+    link: Link | RigidLink = r.build(
+        Link if kind == "flexible" else RigidLink, t, prefix, kind=True
+    )
+    return link
 
 
 def _joints(

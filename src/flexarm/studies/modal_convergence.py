@@ -25,9 +25,10 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._io import JSONValue
+from .._types import F64
 from .._validation import check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arm import BOUNDARIES, FlexibleArm
@@ -37,7 +38,6 @@ from ..sim.results import SimulationError, SimulationResult
 
 __all__ = ["ConvergenceCase", "ModalConvergence", "convergence_check"]
 
-F64 = NDArray[np.float64]
 _OWNER = "convergence_check"
 
 

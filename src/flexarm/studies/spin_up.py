@@ -22,8 +22,8 @@ exact ANCF beam within 0.4 % of the peak deflection at Omega = 6 rad/s and
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
+from .._types import F64
 from .._validation import check_real
 from ..errors import InvalidValueError
 from ..model.arm import FlexibleArm
@@ -33,7 +33,6 @@ from ..sim.results import SimulationResult
 
 __all__ = ["KANE_LINK", "kane_motion", "spin_up"]
 
-F64 = NDArray[np.float64]
 
 KANE_LINK = Link(10.0, 1.4e4, 1.2, n_modes=3)
 """The beam of Kane, Ryan & Banerjee (1987): L (m), EI (N m**2), rho A (kg/m)."""

@@ -20,42 +20,9 @@ from typing import TYPE_CHECKING
 
 from .._lazy import attach
 
-_SUBMODULES = (
-    "cluster",
-    "distributions",
-    "driver",
-    "execute",
-    "journal",
-    "keys",
-    "reader",
-    "records",
-    "spec",
-    "table",
-)
-_NAMES = {
-    "METRICS": "spec",
-    "Choice": "distributions",
-    "ClusterError": "cluster",
-    "Grid": "spec",
-    "Integers": "distributions",
-    "LogUniform": "distributions",
-    "MonteCarlo": "spec",
-    "Normal": "distributions",
-    "SweepError": "reader",
-    "SweepInterrupted": "driver",
-    "SweepRun": "spec",
-    "SweepSpec": "spec",
-    "SweepTable": "table",
-    "SweepTypeError": "reader",
-    "Uniform": "distributions",
-    "load_sweep": "spec",
-    "read_sweep": "spec",
-    "sweep": "driver",
-}
+__getattr__, __dir__, __all__ = attach(__name__)
 
-__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
-
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
     from .cluster import ClusterError as ClusterError
     from .distributions import Choice as Choice
     from .distributions import Integers as Integers

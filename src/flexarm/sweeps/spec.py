@@ -305,15 +305,7 @@ class SweepSpec:
             For an unknown section or key, a missing key or a rejected value.
         """
         r = SweepReader(source)
-        if not isinstance(data, Mapping):
-            r.fail_type(None, f"must be a table of sections. Got {type(data).__name__} instead.")
-        for name, value in data.items():
-            if name not in _FILE_SECTIONS:
-                what = "section" if isinstance(value, Mapping) else "key"
-                r.fail(
-                    None,
-                    f"unknown {what} '{name}' (a sweep file takes {', '.join(_FILE_SECTIONS)})",
-                )
+        data = r.sections(data, _FILE_SECTIONS)
         options = r.as_table(data.get("sweep", {}), "sweep")
         r.keys(options, "sweep", ("metrics",))
         metrics = _metrics(r, options.get("metrics", list(METRICS)))

@@ -29,49 +29,9 @@ from typing import TYPE_CHECKING
 
 from ..._lazy import attach
 
-_SUBMODULES = (
-    "bootstrap",
-    "comparison",
-    "correlated",
-    "identifier",
-    "linear",
-    "prediction",
-    "report",
-    "solution",
-    "systems",
-    "white",
-    "whiteness",
-)
-_NAMES = {
-    "ARMA": "systems",
-    "ARMAFit": "solution",
-    "Bands": "bootstrap",
-    "Comparison": "comparison",
-    "Cubic": "systems",
-    "DeadZone": "systems",
-    "EXAMPLE_ARMA": "systems",
-    "HammersteinIdentifier": "identifier",
-    "HardLimiter": "systems",
-    "IdentificationReport": "report",
-    "IdentificationWarning": "whiteness",
-    "LinearARX": "linear",
-    "PiecewiseLinear": "systems",
-    "Quantizer": "systems",
-    "Saturation": "systems",
-    "Selection": "correlated.selection",
-    "Sign": "systems",
-    "WhitenessReport": "whiteness",
-    "arma_from_impulse_response": "white.arma",
-    "fit_percent": "prediction",
-    "r2_score": "prediction",
-    "simulate_hammerstein": "systems",
-    "two_point_normalisation": "solution",
-    "whiteness_test": "whiteness",
-}
+__getattr__, __dir__, __all__ = attach(__name__)
 
-__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
-
-if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run time
+if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
     from .bootstrap import Bands as Bands
     from .comparison import Comparison as Comparison
     from .correlated.selection import Selection as Selection

@@ -2,16 +2,12 @@
 
 from __future__ import annotations
 
-import numpy as np
-from numpy.typing import NDArray
-
+from ..._types import F64
 from .prediction import max_lag
 from .solution import Solution
 from .systems import ARMA
 
 __all__ = ["SolutionAttributes"]
-
-F64 = NDArray[np.float64]
 
 
 class SolutionAttributes:

@@ -7,11 +7,10 @@ from __future__ import annotations
 
 import numba as nb
 import numpy as np
-from numpy.typing import NDArray
+
+from ..._types import F64
 
 __all__ = ["arma_predict"]
-
-F64 = NDArray[np.float64]
 
 
 @nb.njit(cache=True)

@@ -11,9 +11,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-import numpy as np
-from numpy.typing import NDArray
-
+from ..._types import F64
 from ..._validation import check_int, check_option, check_real
 from ...errors import InvalidValueError
 from ..options import INSTRUMENTS, KERNELS, METHODS, ORDER_RULES
@@ -25,7 +23,6 @@ from .whiteness import WhitenessReport, whiteness_test
 
 __all__ = ["CORRELATED_MAX_ORDER", "check_length", "choose_path", "correlated_orders", "validate"]
 
-F64 = NDArray[np.float64]
 _OWNER = "HammersteinIdentifier"
 
 #: ``max_order=None``: the correlated path's and the linear baseline's largest order.

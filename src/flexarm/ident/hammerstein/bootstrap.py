@@ -35,8 +35,9 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from ..._types import F64, I64
 from ..._validation import check_int, check_real, check_rng
 from ...errors import InvalidValueError
 from ...figures import DOUBLE_COLUMN, new_figure, styled
@@ -51,9 +52,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
 __all__ = ["Bands", "FittedIdentifier", "bootstrap_bands", "circular_blocks"]
-
-F64 = NDArray[np.float64]
-I64 = NDArray[np.int64]
 
 
 def circular_blocks(n: int, block: int, rng: np.random.Generator) -> I64:

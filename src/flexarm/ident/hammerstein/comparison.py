@@ -37,8 +37,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from ..._types import F64
 from .correlated.selection import (
     Candidate,
     Selection,
@@ -53,7 +53,6 @@ from .solution import Solution
 
 __all__ = ["WINNERS", "Comparison", "compare_outputs", "correlated_comparison", "white_comparison"]
 
-F64 = NDArray[np.float64]
 
 #: The two possible winners.
 WINNERS = ("hammerstein", "linear")

@@ -58,6 +58,7 @@ from typing import Any, Self
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..._types import F64
 from ..._validation import check_array, check_int
 from ...errors import InvalidValueError
 from .._estimator import NotFittedError, SavedEstimator, frozen_params
@@ -80,7 +81,6 @@ from .whiteness import DEFAULT_ALPHA, IdentificationWarning, WhitenessReport
 
 __all__ = ["DEFAULT_BANDWIDTH", "HammersteinIdentifier", "HammersteinState"]
 
-F64 = NDArray[np.float64]
 _OWNER = "HammersteinIdentifier"
 
 #: The default bandwidth: 0.55 times Silverman's rule on the first ``warmup`` inputs.

@@ -20,9 +20,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Self
 
-import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from ..._types import F64
 from ..._validation import check_int, check_option, check_real
 from ...errors import InvalidValueError
 from .._estimator import Estimator, Fitted
@@ -33,7 +33,6 @@ from .systems import ARMA
 
 __all__ = ["MIN_SAMPLES", "LinearARX", "LinearFit", "LinearModel", "baseline_fit", "linear_model"]
 
-F64 = NDArray[np.float64]
 _OWNER = "LinearARX"
 
 #: Fewest samples of a record identified with held-out validation.
@@ -153,6 +152,7 @@ class LinearARX(Scored, Estimator[LinearFit]):
 
     Examples
     --------
+    >>> import numpy as np
     >>> rng = np.random.default_rng(0)
     >>> u = rng.normal(size=3000)
     >>> y = ARMA((0.7,), (1.0, 0.5)).filter(u) + 0.05 * rng.normal(size=3000)

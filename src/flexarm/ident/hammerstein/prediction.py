@@ -25,8 +25,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from ..._types import F64
 from ..._validation import check_array, check_int
 from ...errors import InvalidTypeError, InvalidValueError
 from .systems import ARMA
@@ -41,8 +42,6 @@ __all__ = [
     "predict_output",
     "r2_score",
 ]
-
-F64 = NDArray[np.float64]
 
 
 def check_input(u: ArrayLike, owner: str, name: str = "u") -> F64:

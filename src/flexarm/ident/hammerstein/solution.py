@@ -15,8 +15,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
 
+from ..._types import F64
 from ..._validation import check_real
 from ...errors import InvalidValueError
 from .systems import ARMA
@@ -29,7 +29,6 @@ __all__ = [
     "two_point_normalisation",
 ]
 
-F64 = NDArray[np.float64]
 #: Two points where the nonlinearity is known: ``((x1, phi1), (x2, phi2))``.
 KnownPoints = tuple[tuple[float, float], tuple[float, float]]
 

@@ -27,8 +27,10 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..._types import F64
 from ..._validation import check_array, check_real, check_rng, validate_real_fields
 from ...errors import InvalidTypeError, InvalidValueError
+from .._estimator import callable_output
 
 __all__ = [
     "ARMA",
@@ -44,8 +46,6 @@ __all__ = [
     "simulate_hammerstein",
     "spectral_radius",
 ]
-
-F64 = NDArray[np.float64]
 
 
 class Nonlinearity(Protocol):
@@ -483,17 +483,8 @@ def simulate_hammerstein(
         )
     sigma = check_real(noise_std, "noise_std", owner, nonnegative=True)
     gen = check_rng(rng, owner)
-    w = np.asarray(phi(ua), dtype=np.float64)
-    if w.shape != ua.shape:
-        raise InvalidValueError(
-            f"The 'phi' parameter of {owner} must return an array of the input's shape "
-            f"{ua.shape}. Got shape {w.shape} instead."
-        )
-    if not np.all(np.isfinite(w)):
-        raise InvalidValueError(
-            f"The 'phi' parameter of {owner} must return finite values. "
-            "Got non-finite values instead."
-        )
+    expected = f"an array of the input's shape {ua.shape}"
+    w = callable_output(phi(ua), "phi", owner, ua.shape, expected)
     if sigma > 0.0:
         w = w + sigma * gen.standard_normal(ua.shape[0])
     from scipy.signal import lfilter

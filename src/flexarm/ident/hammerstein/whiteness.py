@@ -33,14 +33,14 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from ..._types import F64
 from ..._validation import check_array, check_int, check_real
 from ...errors import InvalidValueError
 
 __all__ = ["DEFAULT_ALPHA", "IdentificationWarning", "WhitenessReport", "whiteness_test"]
 
-F64 = NDArray[np.float64]
 
 #: Default level of the whiteness test (both statistics together; module docstring).
 DEFAULT_ALPHA = 0.001

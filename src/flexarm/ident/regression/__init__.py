@@ -23,29 +23,9 @@ from typing import TYPE_CHECKING
 
 from ..._lazy import attach
 
-_SUBMODULES = (
-    "accumulators",
-    "bandwidth",
-    "binning",
-    "chunked",
-    "convergence",
-    "estimators",
-    "kernels",
-)
-_NAMES = {
-    "ConvergenceResult": "convergence",
-    "NadarayaWatson": "estimators",
-    "RecursiveKernelRegression": "estimators",
-    "SemiRecursiveKernelRegression": "estimators",
-    "Silverman": "bandwidth",
-    "convergence_study": "convergence",
-    "evaluate_kernel": "kernels",
-    "silverman_bandwidth": "bandwidth",
-}
+__getattr__, __dir__, __all__ = attach(__name__)
 
-__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
-
-if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run time
+if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
     from .bandwidth import Silverman as Silverman
     from .bandwidth import silverman_bandwidth as silverman_bandwidth
     from .convergence import ConvergenceResult as ConvergenceResult

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..._types import F64
 from ..._validation import check_array, check_option, check_real
 from ...errors import InvalidTypeError, InvalidValueError
 from ..options import BINNABLE
@@ -24,7 +25,6 @@ from .kernels import KERNELS
 
 __all__ = ["BIN_MAX", "BIN_MIN", "check_X", "check_Xy", "smoothing"]
 
-F64 = NDArray[np.float64]
 
 #: Allowed relative bin widths ``r = delta / h`` of binned mode.
 BIN_MIN, BIN_MAX = 1e-4, 0.5

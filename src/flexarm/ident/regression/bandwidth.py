@@ -56,15 +56,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from ..._types import F64
 from ..._validation import check_array, check_int, check_real
 from ...errors import InvalidTypeError, InvalidValueError
 from ..options import BANDWIDTH_RULES
 
 __all__ = ["BANDWIDTH_RULES", "Silverman", "as_rule", "silverman_bandwidth"]
-
-F64 = NDArray[np.float64]
 
 
 def _spread(X: F64, owner: str, name: str) -> F64:

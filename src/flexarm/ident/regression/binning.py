@@ -85,9 +85,8 @@ from __future__ import annotations
 import math
 
 import numba as nb
-import numpy as np
-from numpy.typing import NDArray
 
+from ..._types import F64
 from ..options import BINNABLE
 from .kernels import kernel_profile
 
@@ -103,7 +102,6 @@ __all__ = [
     "radius",
 ]
 
-F64 = NDArray[np.float64]
 
 #: Truncation radius of the Gaussian in binned mode, in units of ``h_B``.
 GAUSS_RADIUS = 9.0

@@ -33,7 +33,6 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from ..._budget import check_memory
 from ...errors import FlexarmError, InvalidTypeError, InvalidValueError
@@ -43,7 +42,6 @@ from .accumulators.blocks import ChunkPartials
 
 __all__ = ["chunk_task", "fit_dask", "fit_iterable", "is_dask", "window"]
 
-F64 = NDArray[np.float64]
 #: Starts (or returns) the estimator's accumulator for ``d`` inputs, naming the source.
 Begin = Callable[[int, str], Accumulator]
 #: Largest chunk of a rechunked Dask array, in blocks.

@@ -54,10 +54,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..._types import F64
 from ..._validation import check_array, check_int, check_option, check_real
 from ...errors import InvalidTypeError, InvalidValueError
 from ...figures import SINGLE_COLUMN, FigureFormat, new_figure, styled
-from .._output import save_table_and_plot
+from .._output import save_docstring, save_table_and_plot
 from ..options import DISTRIBUTIONS
 from .bandwidth import Silverman, as_rule
 from .estimators import SemiRecursiveKernelRegression
@@ -75,7 +76,6 @@ __all__ = [
     "sample_sizes",
 ]
 
-F64 = NDArray[np.float64]
 _OWNER = "convergence_study"
 
 
@@ -264,28 +264,13 @@ class ConvergenceResult:
         ax.legend()
         return ax
 
+    @save_docstring("``study.csv`` (columns ``n,mise,std``) and ``study.png``", "study")
     def save(
         self,
         directory: str | os.PathLike[str],
         *,
         figure_format: FigureFormat | str | None = None,
     ) -> list[Path]:
-        """Write ``study.csv`` (columns ``n,mise,std``) and ``study.png`` into ``directory``.
-
-        Each file is written atomically; the directory is created if needed.
-
-        Parameters
-        ----------
-        directory : str or path-like
-        figure_format : FigureFormat or str, optional
-            The figure's format and resolution (default PNG,
-            :class:`flexarm.figures.FigureFormat`): ``study.pdf`` with ``"pdf"``.
-
-        Returns
-        -------
-        list of Path
-            The files written.
-        """
         header, table = self.table()
         columns = (list(table.T), ",".join(header), "%.10g")
         return save_table_and_plot(directory, "study", columns, self.plot, 2.8, figure_format)

@@ -84,6 +84,7 @@ from typing import Any, ClassVar, Self
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..._types import F64
 from ...errors import InvalidValueError
 from .._estimator import SavedEstimator
 from ._setup import check_X, check_Xy, smoothing
@@ -100,7 +101,6 @@ __all__ = [
     "SemiRecursiveKernelRegression",
 ]
 
-F64 = NDArray[np.float64]
 #: A bandwidth: ``h_1`` (one value, or one per input dimension), a rule name or a rule.
 Bandwidth = float | ArrayLike | str | Silverman
 

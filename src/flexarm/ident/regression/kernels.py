@@ -38,8 +38,9 @@ from collections.abc import Callable
 
 import numba as nb
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from ..._types import F64
 from ..._validation import check_array, check_option
 from ...errors import InvalidValueError
 from ..options import KERNELS
@@ -60,7 +61,6 @@ __all__ = [
     "support_radius",
 ]
 
-F64 = NDArray[np.float64]
 
 #: A user kernel: ``u`` of shape ``(m, d)`` in, weights of shape ``(m,)`` out.
 KernelFunction = Callable[[F64], ArrayLike]
@@ -300,13 +300,18 @@ def gauss_series_eval(
         x = q[m]
         klo[m] = int(max(0.0, min(float(nk), (x - SERIES_REACH * h - origin) / w)))
         khi[m] = int(max(-1.0, min(nk - 1.0, (x + SERIES_REACH * h - origin) / w + 1.0)))
-    s0 = np.full(g, np.inf)  # t**2/2 of each point's nearest non-empty cluster in reach
+    first = np.empty(nk, np.int64)  # cluster k reaches the points first[k] .. stop[k] - 1
+    stop = np.empty(nk, np.int64)
     m0 = m1 = 0
     for k in range(nk):
         while m1 < g and klo[m1] <= k:
             m1 += 1
         while m0 < m1 and khi[m0] < k:
             m0 += 1
+        first[k], stop[k] = m0, m1
+    s0 = np.full(g, np.inf)  # t**2/2 of each point's nearest non-empty cluster in reach
+    for k in range(nk):
+        m0, m1 = first[k], stop[k]
         if md[k, 0] == 0.0:
             continue
         ck = origin + (k + 0.5) * w
@@ -321,12 +326,8 @@ def gauss_series_eval(
     ts = np.empty(g)
     an = np.empty(g)
     ad = np.empty(g)
-    m0 = m1 = 0
     for k in range(nk):
-        while m1 < g and klo[m1] <= k:
-            m1 += 1
-        while m0 < m1 and khi[m0] < k:
-            m0 += 1
+        m0, m1 = first[k], stop[k]
         if md[k, 0] == 0.0 or m0 == m1:
             continue
         ck = origin + (k + 0.5) * w

@@ -98,25 +98,9 @@ from typing import TYPE_CHECKING
 
 from ..._lazy import attach
 
-_SUBMODULES = ("design", "estimation", "experiment", "parameters", "result", "study")
-_NAMES = {
-    "CurveEstimate": "result",
-    "DeadBandDesign": "design",
-    "design_dead_band_excitation": "design",
-    "DriveNonlinearity": "parameters",
-    "JointExcitation": "parameters",
-    "JointIdentification": "result",
-    "JointMeasurements": "experiment",
-    "JointRecord": "experiment",
-    "JointSensors": "parameters",
-    "TORQUE_MEASUREMENTS": "study",
-    "identify_joint": "study",
-    "joint_test_arm": "experiment",
-}
+__getattr__, __dir__, __all__ = attach(__name__)
 
-__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
-
-if TYPE_CHECKING:  # what type checkers see; nothing is imported at run time
+if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
     from .design import DeadBandDesign as DeadBandDesign
     from .design import design_dead_band_excitation as design_dead_band_excitation
     from .experiment import JointMeasurements as JointMeasurements

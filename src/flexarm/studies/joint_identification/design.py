@@ -53,13 +53,14 @@ import numpy as np
 
 from ..._io import JSONValue
 from ..._validation import check_real, check_rng
-from ...errors import InvalidTypeError, InvalidValueError
+from ...errors import InvalidValueError
 from ...ident.hammerstein._params import CORRELATED_MAX_ORDER
 from ...ident.hammerstein.identifier import HammersteinIdentifier
 from ...ident.hammerstein.whiteness import IdentificationWarning
 from ...model.arm import FlexibleArm
+from ...model.joints import LinearJoint, NonlinearJoint
 from .experiment import joint_test_arm, measure, run_excitation
-from .parameters import JointExcitation, JointSensors
+from .parameters import JointExcitation, JointSensors, check_types
 
 __all__ = ["GRAM_FACTOR", "DeadBandDesign", "design_dead_band_excitation"]
 
@@ -167,16 +168,12 @@ def design_dead_band_excitation(
     pilot = JointExcitation(duration=20.0) if pilot is None else pilot
     sensors = JointSensors() if sensors is None else sensors
     arm = joint_test_arm() if arm is None else arm
-    for name, value, kind in (
+    check_types(
+        _OWNER,
         ("pilot", pilot, JointExcitation),
         ("sensors", sensors, JointSensors),
         ("arm", arm, FlexibleArm),
-    ):
-        if not isinstance(value, kind):
-            raise InvalidTypeError(
-                f"The '{name}' parameter of {_OWNER} must be a {kind.__name__}. "
-                f"Got {type(value).__name__} instead."
-            )
+    )
     drive = pilot.drive
     delta = drive.dead_band if dead_band is None else check_real(dead_band, "dead_band", _OWNER)
     if not delta > 0.0:
@@ -202,7 +199,7 @@ def design_dead_band_excitation(
             )
     gen = check_rng(rng, _OWNER)
     joint = arm.joints[0] if arm.joints else None
-    if joint is None:
+    if not isinstance(joint, LinearJoint | NonlinearJoint):
         raise InvalidValueError(
             f"The 'arm' parameter of {_OWNER} must have a flexible joint. Got none instead."
         )

@@ -23,8 +23,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from ..._types import F64
 from ...ident.hammerstein.identifier import HammersteinIdentifier
 from ...ident.hammerstein.prediction import fit_percent
 from ...ident.hammerstein.whiteness import IdentificationWarning
@@ -44,7 +45,6 @@ __all__ = [
     "windup_secants",
 ]
 
-F64 = NDArray[np.float64]
 Joint = NonlinearJoint | LinearJoint
 
 

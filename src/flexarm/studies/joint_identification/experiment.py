@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..._types import F64
 from ..._validation import check_real
 from ...model.arm import FlexibleArm
 from ...model.joints import LinearJoint, MakkarFriction, NonlinearJoint
@@ -21,8 +22,6 @@ from ...sim.open_loop import simulate_open_loop
 from .parameters import JointExcitation, JointSensors
 
 __all__ = ["JointMeasurements", "JointRecord", "joint_test_arm", "measure", "run_excitation"]
-
-F64 = NDArray[np.float64]
 
 
 def joint_test_arm(

@@ -8,14 +8,24 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from ..._types import F64
 from ..._validation import validate_real_fields
 from ...errors import InvalidTypeError, InvalidValueError
 
-__all__ = ["DriveNonlinearity", "JointExcitation", "JointSensors"]
+__all__ = ["DriveNonlinearity", "JointExcitation", "JointSensors", "check_types"]
 
-F64 = NDArray[np.float64]
+
+def check_types(owner: str, *checks: tuple[str, object, type]) -> None:
+    """Raise the :class:`~flexarm.errors.InvalidTypeError` of the first
+    ``(name, value, kind)`` whose ``value`` is not a ``kind``."""
+    for name, value, kind in checks:
+        if not isinstance(value, kind):
+            raise InvalidTypeError(
+                f"The '{name}' parameter of {owner} must be a {kind.__name__}. "
+                f"Got {type(value).__name__} instead."
+            )
 
 
 @dataclass(frozen=True)

@@ -10,24 +10,24 @@ import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
 from ..._io import JSONValue, atomic_path
+from ..._types import F64
 from ...figures import DOUBLE_COLUMN, FigureFormat, new_figure, save_figure, styled
-from ...ident._output import output_directory
+from ...ident._output import output_directory, save_docstring
 from .parameters import DriveNonlinearity
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
     from ...ident.hammerstein.identifier import HammersteinIdentifier
 
 __all__ = ["SAVED_FILES", "CurveEstimate", "JointIdentification", "saved_files"]
 
-F64 = NDArray[np.float64]
 SAVED_FILES = ("summary.json", "curves.npz", "identify_joint.png")
 """What :meth:`JointIdentification.save` writes (the figure as PNG, the default)."""
 _FIGURE_SIZE = (DOUBLE_COLUMN, 5.0)  # inches: two columns of a paper
@@ -154,29 +154,18 @@ class JointIdentification:
             "info": dict(self.info),
         }
 
+    @save_docstring(
+        "``summary.json``, ``curves.npz`` and ``identify_joint.png``",
+        "identify_joint",
+        note="The figure is drawn off screen (no pyplot, no change of backend).",
+        returns=" (:func:`saved_files`)",
+    )
     def save(
         self,
         directory: str | os.PathLike[str],
         *,
         figure_format: FigureFormat | str | None = None,
     ) -> list[Path]:
-        """Write ``summary.json``, ``curves.npz`` and ``identify_joint.png`` into ``directory``.
-
-        Each file is written atomically; the directory is created if needed.
-        The figure is drawn off screen (no pyplot, no change of backend).
-
-        Parameters
-        ----------
-        directory : str or path-like
-        figure_format : FigureFormat or str, optional
-            The figure's format and resolution (default PNG,
-            :class:`flexarm.figures.FigureFormat`): ``identify_joint.pdf`` with ``"pdf"``.
-
-        Returns
-        -------
-        list of Path
-            The files written (:func:`saved_files`).
-        """
         out = output_directory(directory)
         paths = [out / name for name in SAVED_FILES[:-1]]
         with atomic_path(paths[0]) as tmp:
@@ -212,44 +201,30 @@ class JointIdentification:
         axes = fig.subplots(2, 2)
         s = self.stiffness
         ax = axes[0, 0]
-        ax.plot(1e3 * s.x, s.truth, "k--", lw=0.8, zorder=3, label="true")
-        ax.plot(1e3 * s.x, s.estimate, lw=1.2, label="estimate")
+        _curves(ax, 1e3 * s.x, s.truth, s.estimate, ("true", "estimate"), "upper left")
         ax.set(
             xlabel="deflection Δ (mrad)",
             ylabel="stiffness torque τ_s (N m)",
             title="joint stiffness torque",
         )
-        ax.legend(loc="upper left")
         w = self.info.get("windup_width_rad")
         if isinstance(w, int | float) and w:  # the soft-windup width, rad (0: none)
-            inset = ax.inset_axes((0.58, 0.08, 0.38, 0.38))
             sel = np.abs(s.x) <= 3 * w
-            inset.plot(1e3 * s.x[sel], s.truth[sel], "k--", lw=0.8, zorder=3)
-            inset.plot(1e3 * s.x[sel], s.estimate[sel], lw=1.2)
-            inset.set_title("soft windup", fontsize=7, pad=2)
-            inset.tick_params(labelsize=6, pad=1)
+            _inset(ax, 1e3 * s.x[sel], s.truth[sel], s.estimate[sel], "soft windup")
         f = self.friction
         ax = axes[0, 1]
-        ax.plot(f.x, f.truth, "k--", lw=0.8, zorder=3, label="true")
-        ax.plot(f.x, f.estimate, lw=1.2, label="estimate")
+        _curves(ax, f.x, f.truth, f.estimate, ("true", "estimate"), "best")
         ax.set(xlabel="link rate v (rad/s)", ylabel="friction f(v) (N m)", title="joint friction")
-        ax.legend(loc="best")
         d = self.drive
         ax = axes[1, 0]
-        ax.plot(d.x, d.truth, "k--", lw=0.8, zorder=3, label="true drive map")
-        ax.plot(d.x, d.estimate, lw=1.2, label="Hammerstein φ̂")
+        _curves(ax, d.x, d.truth, d.estimate, ("true drive map", "Hammerstein φ̂"), "upper left")
         ax.set(xlabel="command u (N m)", ylabel="applied torque (N m)", title="drive nonlinearity")
-        ax.legend(loc="upper left")
         span = self.dead_band.get("span_Nm")
         drive = self.info.get("drive")
         if span and isinstance(drive, dict):  # the dead band, enlarged
             truth = DriveNonlinearity(float(drive["dead_band_Nm"]), float(drive["limit_Nm"]))  # type: ignore[arg-type]
             xs = np.linspace(-span, span, 241)
-            inset = ax.inset_axes((0.58, 0.08, 0.38, 0.38))
-            inset.plot(xs, truth(xs), "k--", lw=0.8, zorder=3)
-            inset.plot(xs, self.hammerstein.nonlinearity(xs), lw=1.2)
-            inset.set_title("dead band", fontsize=7, pad=2)
-            inset.tick_params(labelsize=6, pad=1)
+            _inset(ax, xs, truth(xs), self.hammerstein.nonlinearity(xs), "dead band")
         v = self.validation
         ax = axes[1, 1]
         m = min(200, v["t"].shape[0])
@@ -258,3 +233,27 @@ class JointIdentification:
         ax.set(xlabel="t (s)", ylabel="link acceleration (rad/s²)", title="held-out data")
         ax.legend(loc="best")
         return fig
+
+
+def _curves(
+    ax: Axes,
+    x: F64,
+    truth: F64,
+    estimate: F64,
+    labels: tuple[str, str],
+    legend: Literal["best", "upper left"],
+) -> None:
+    """The true curve (dashed, on top) and its estimate against ``x``, with a legend at
+    ``legend``."""
+    ax.plot(x, truth, "k--", lw=0.8, zorder=3, label=labels[0])
+    ax.plot(x, estimate, lw=1.2, label=labels[1])
+    ax.legend(loc=legend)
+
+
+def _inset(ax: Axes, x: F64, truth: F64, estimate: F64, title: str) -> None:
+    """The true curve and its estimate enlarged in an inset at the lower right of ``ax``."""
+    inset = ax.inset_axes((0.58, 0.08, 0.38, 0.38))
+    inset.plot(x, truth, "k--", lw=0.8, zorder=3)
+    inset.plot(x, estimate, lw=1.2)
+    inset.set_title(title, fontsize=7, pad=2)
+    inset.tick_params(labelsize=6, pad=1)

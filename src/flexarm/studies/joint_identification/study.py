@@ -9,9 +9,10 @@ from ..._validation import check_int, check_option, check_real, check_rng
 from ...errors import InvalidTypeError, InvalidValueError
 from ...ident.options import METHODS
 from ...model.arm import FlexibleArm
+from ...model.joints import LinearJoint, NonlinearJoint
 from .estimation import estimate_friction, estimate_stiffness, fit_hammerstein, windup_secants
 from .experiment import joint_test_arm, measure, run_excitation
-from .parameters import JointExcitation, JointSensors
+from .parameters import JointExcitation, JointSensors, check_types
 from .result import JointIdentification
 
 __all__ = ["TORQUE_MEASUREMENTS", "identify_joint"]
@@ -92,23 +93,18 @@ def identify_joint(
             f"The 'arm' parameter of {_OWNER} must be a FlexibleArm. "
             f"Got {type(arm).__name__} instead."
         )
-    if arm.n_links != 1 or arm.joints is None or arm.n_modes != (0,):
+    if arm.n_links != 1 or not arm.has_flexible_joints or arm.n_modes != (0,):
+        joints = "flexible" if arm.has_flexible_joints else "rigid"
         raise InvalidValueError(
             f"The 'arm' parameter of {_OWNER} must be one rigid link (n_modes=0) on a "
             f"flexible joint. Got {arm.n_links} link(s), modes {arm.n_modes}, "
-            f"joints {'none' if arm.joints is None else 'flexible'} instead."
+            f"joints {joints} instead."
         )
     excitation = JointExcitation() if excitation is None else excitation
     sensors = JointSensors() if sensors is None else sensors
-    for name, value, kind in (
-        ("excitation", excitation, JointExcitation),
-        ("sensors", sensors, JointSensors),
-    ):
-        if not isinstance(value, kind):
-            raise InvalidTypeError(
-                f"The '{name}' parameter of {_OWNER} must be a {kind.__name__}. "
-                f"Got {type(value).__name__} instead."
-            )
+    check_types(
+        _OWNER, ("excitation", excitation, JointExcitation), ("sensors", sensors, JointSensors)
+    )
     check_option(torque_measurement, "torque_measurement", _OWNER, TORQUE_MEASUREMENTS)
     check_option(method, "method", _OWNER, METHODS)
     quasi_static_fraction = check_real(
@@ -139,7 +135,8 @@ def identify_joint(
             f"{max(4 * n_lags, 300)} holds (duration / hold). Got {n_holds} instead."
         )
 
-    joint = arm.joints[0]
+    joint = arm.joints[0] if arm.joints else None
+    assert isinstance(joint, LinearJoint | NonlinearJoint)  # a flexible joint (checked above)
     record = run_excitation(arm, excitation, gen)
     meas = measure(record, joint, sensors, gen)
     stiffness, n_static = estimate_stiffness(

@@ -41,24 +41,10 @@ from typing import TYPE_CHECKING
 from ..._lazy import attach
 
 _SUBMODULES = ("cases", "experiment", "report", "study", "verdicts")
-_NAMES = {
-    "ADAPTATION_LAWS": "cases",
-    "CONTROLLER_KINDS": "cases",
-    "DEFAULT_KS_RANGE": "cases",
-    "DELAY_CASES": "cases",
-    "SENSOR_CASES": "cases",
-    "Case": "cases",
-    "CaseResult": "cases",
-    "Claim": "verdicts",
-    "OUTPUT_FILES": "report",
-    "Reproduction": "report",
-    "RunMatrix": "experiment",
-    "reproduce": "study",
-}
 
-__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES, _NAMES)
+__getattr__, __dir__, __all__ = attach(__name__, _SUBMODULES)
 
-if TYPE_CHECKING:  # what type checkers see; nothing is imported at run time
+if TYPE_CHECKING:  # the public names (attach reads them); nothing is imported at run time
     from .cases import ADAPTATION_LAWS as ADAPTATION_LAWS
     from .cases import CONTROLLER_KINDS as CONTROLLER_KINDS
     from .cases import DEFAULT_KS_RANGE as DEFAULT_KS_RANGE

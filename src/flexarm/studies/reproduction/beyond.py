@@ -428,36 +428,28 @@ def _targets(b: Beyond) -> list[dict[str, str | float | bool | None]]:
         for key, limit in limits.items():
             value = dict(nominal)[key]
             reached = float(value) if isinstance(value, int | float) else None
-            out.append(
-                {
-                    "sensor": sensor,
-                    "target": f"{key} <= {limit:g}",
-                    "value": reached,
-                    "met": reached is not None and reached <= limit,
-                }
-            )
+            out.append(_target(sensor, f"{key} <= {limit:g}", reached, limit))
         torque = nominal["max_torque_Nm"]
-        out.append(
-            {
-                "sensor": sensor,
-                "target": f"max_torque_Nm <= {TORQUE_TARGET:g}",
-                "value": torque,
-                "met": torque is not None and torque <= TORQUE_TARGET,
-            }
-        )
+        out.append(_target(sensor, f"max_torque_Nm <= {TORQUE_TARGET:g}", torque, TORQUE_TARGET))
         base = nominal["rms_error_m"]
         for r in runs[1:]:
             rms = r["rms_error_m"]
             ratio = None if rms is None or base is None else rms / base
-            out.append(
-                {
-                    "sensor": sensor,
-                    "target": f"{r['row']}: rms <= {ROW_FACTOR:g} x nominal",
-                    "value": ratio,
-                    "met": ratio is not None and ratio <= ROW_FACTOR,
-                }
-            )
+            target = f"{r['row']}: rms <= {ROW_FACTOR:g} x nominal"
+            out.append(_target(sensor, target, ratio, ROW_FACTOR))
     return out
+
+
+def _target(
+    sensor: str, target: str, value: float | None, limit: float
+) -> dict[str, str | float | bool | None]:
+    """A row of the targets' table: met where ``value`` is known and ``<= limit``."""
+    return {
+        "sensor": sensor,
+        "target": target,
+        "value": value,
+        "met": value is not None and value <= limit,
+    }
 
 
 def _num(v: object) -> str:

@@ -18,12 +18,13 @@ significant figures); the JSON and CSV keep every digit, in SI units.
 from __future__ import annotations
 
 import csv
+import inspect
 import json
 import os
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, TypedDict
+from typing import TYPE_CHECKING, Any, TypedDict, TypeVar
 
 import numpy as np
 
@@ -118,6 +119,29 @@ class Settings(TypedDict):
     tolerance_m: float
     runs: int
     wall_time_s: float
+
+
+_FIGURE_PARAMETERS = """
+
+Parameters
+----------
+fig : matplotlib Figure, optional
+    Where to draw (an empty figure); default a new figure of
+    :data:`FIGURE_SIZES` (not registered with pyplot).
+
+Returns
+-------
+Figure
+"""
+
+_Plot = TypeVar("_Plot", bound=Callable[..., Any])
+
+
+def _figure_parameters(plot: _Plot) -> _Plot:
+    """Complete the docstring of a ``plot_*(fig=None)`` method with the sections all of
+    them share."""
+    plot.__doc__ = inspect.cleandoc(plot.__doc__ or "") + _FIGURE_PARAMETERS
+    return plot
 
 
 @dataclass
@@ -303,19 +327,9 @@ class Reproduction:
                 yield ax, case
 
     @styled
+    @_figure_parameters
     def plot_tracking(self, fig: Figure | None = None) -> Figure:
-        """XY path of the end effector against the square, one panel per case of the matrix.
-
-        Parameters
-        ----------
-        fig : matplotlib Figure, optional
-            Where to draw (an empty figure); default a new figure of
-            :data:`FIGURE_SIZES` (not registered with pyplot).
-
-        Returns
-        -------
-        Figure
-        """
+        """XY path of the end effector against the square, one panel per case of the matrix."""
         fig = _figure(fig, "tracking")
         for ax, c in self._panels(fig, "x (m)", "y (m)"):
             r = c.result
@@ -328,19 +342,9 @@ class Reproduction:
         return fig
 
     @styled
+    @_figure_parameters
     def plot_deflections(self, fig: Figure | None = None) -> Figure:
-        """Tip deflection of each link against time, one panel per case of the matrix.
-
-        Parameters
-        ----------
-        fig : matplotlib Figure, optional
-            Where to draw (an empty figure); default a new figure of
-            :data:`FIGURE_SIZES` (not registered with pyplot).
-
-        Returns
-        -------
-        Figure
-        """
+        """Tip deflection of each link against time, one panel per case of the matrix."""
         from ...sim.results import envelope
 
         fig = _figure(fig, "deflections")
@@ -373,6 +377,7 @@ class Reproduction:
         return ax, artist
 
     @styled
+    @_figure_parameters
     def plot_sensitivity(self, fig: Figure | None = None) -> Figure:
         """RMS error of the fuzzy law against ``ks``, one panel per sensor (x: diverged).
 
@@ -380,16 +385,6 @@ class Reproduction:
         line style, and is shifted a little along the ``ks`` axis, so that series
         with the same error (the encoders read the same under both sensor models)
         do not hide each other. The ``pd`` runs are horizontal lines.
-
-        Parameters
-        ----------
-        fig : matplotlib Figure, optional
-            Where to draw (an empty figure); default a new figure of
-            :data:`FIGURE_SIZES` (not registered with pyplot).
-
-        Returns
-        -------
-        Figure
         """
         from matplotlib.ticker import LogFormatter
 

@@ -21,12 +21,10 @@ from __future__ import annotations
 
 import numba as nb
 import numpy as np
-from numpy.typing import NDArray
+
+from ...._types import F64, I64
 
 __all__ = ["hammerstein_gram", "instrument_cross", "locate_sorted"]
-
-F64 = NDArray[np.float64]
-I64 = NDArray[np.int64]
 
 
 @nb.njit(cache=True)

@@ -62,14 +62,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ...._types import F64, I64
 from ..systems import spectral_radius
 from ._loops import hammerstein_gram, instrument_cross
 from .hatbasis import evaluate, locate, quantile_knots
 
 __all__ = ["Design", "Located", "StructureFit", "fit_structure", "n_params", "one_blas_thread"]
 
-F64 = NDArray[np.float64]
-I64 = NDArray[np.int64]
 
 #: Instrumental-variable steps tried after least squares (each kept only if it helps).
 MAX_IV_STEPS = 4

@@ -23,12 +23,10 @@ the edges of a Gaussian or a swept input.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
+
+from ...._types import F64, I64
 
 __all__ = ["evaluate", "locate", "quantile_knots"]
-
-F64 = NDArray[np.float64]
-I64 = NDArray[np.int64]
 
 
 def quantile_knots(u_sorted: F64, n_knots: int) -> F64:

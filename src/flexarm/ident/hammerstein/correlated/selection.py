@@ -77,6 +77,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ...._types import F64, I64
 from .arx import Design, Located, StructureFit, fit_structure, n_params, one_blas_thread
 
 __all__ = [
@@ -106,8 +107,6 @@ __all__ = [
     "validation_fit",
 ]
 
-F64 = NDArray[np.float64]
-I64 = NDArray[np.int64]
 
 #: Knot counts tried (2: linear).
 KNOT_GRID: tuple[int, ...] = (2, 3, 4, 6, 8, 11, 16, 23, 32, 45, 64, 91, 128)

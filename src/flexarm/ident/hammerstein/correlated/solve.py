@@ -24,8 +24,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from ...._types import F64
 from ....errors import InvalidValueError
 from ..solution import ARMAFit, KnownPoints, Solution, two_point_normalisation
 from ..systems import ARMA
@@ -34,8 +34,6 @@ from .hatbasis import evaluate, locate
 from .selection import Selection, final_fit, select_structure
 
 __all__ = ["CorrelatedResult", "solve_correlated"]
-
-F64 = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

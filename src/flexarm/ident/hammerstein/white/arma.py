@@ -23,8 +23,9 @@ SciPy is imported when a fit runs, not with this module.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from ...._types import F64
 from ...._validation import check_array, check_int, check_option
 from ....errors import InvalidValueError
 from ...options import CRITERIA
@@ -32,8 +33,6 @@ from ..solution import ARMAFit
 from ..systems import ARMA, spectral_radius
 
 __all__ = ["arma_from_impulse_response"]
-
-F64 = NDArray[np.float64]
 
 
 def _stabilise(a: F64) -> F64:

@@ -17,15 +17,13 @@ by BIC).
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
+from ...._types import F64
 from ....errors import InvalidValueError
 from ..solution import KnownPoints, Solution, two_point_normalisation
 from .arma import arma_from_impulse_response
 
 __all__ = ["solve"]
-
-F64 = NDArray[np.float64]
 
 
 def solve(

@@ -20,6 +20,7 @@ import numba as nb
 import numpy as np
 from numpy.typing import NDArray
 
+from ...._types import F64
 from ....errors import InvalidValueError
 from ...regression.accumulators import State
 from ...regression.bandwidth import Silverman
@@ -31,8 +32,6 @@ __all__ = ["WHITE_MAX_ORDER", "LagRegressions", "solve_white", "white_solution"]
 
 #: ``max_order=None``: the white path's largest ARMA order (BIC), as before the correlated path.
 WHITE_MAX_ORDER = 4
-
-F64 = NDArray[np.float64]
 
 
 @nb.njit(cache=True)

@@ -13,8 +13,8 @@ import math
 
 import numba as nb
 import numpy as np
-from numpy.typing import NDArray
 
+from ...._types import F64, I64
 from ..kernels import kernel_weight
 
 __all__ = [
@@ -33,8 +33,6 @@ __all__ = [
     "search_table",
 ]
 
-F64 = NDArray[np.float64]
-I64 = NDArray[np.int64]
 
 #: ``exp(-u**2 / 2) == 0.0`` exactly in float64 for ``|u| > 38.61`` (``u**2/2 > 745.2``).
 GAUSS_ZERO = 38.61

@@ -20,7 +20,9 @@ from typing import Any, ClassVar, Self
 import numpy as np
 from numpy.typing import NDArray
 
+from ...._types import F64, I64
 from ....errors import InvalidValueError
+from ..._estimator import callable_output
 from ..kernels import KernelFunction
 from . import _loops
 from .blocks import BLOCK, ChunkPartials, segments, zeros_like
@@ -34,8 +36,6 @@ __all__ = [
     "State",
 ]
 
-F64 = NDArray[np.float64]
-I64 = NDArray[np.int64]
 #: An accumulator's state: plain arrays by name (``.npz``-ready, no pickle).
 State = dict[str, NDArray[Any]]
 
@@ -110,17 +110,8 @@ class Smoothing:
         assert callable(kernel)
         u = (Q[None, :, :] - X[:, None, :]) / h[:, None, :]
         flat = u.reshape(-1, Q.shape[1])
-        w = np.asarray(kernel(flat), dtype=np.float64)
-        if w.shape != (flat.shape[0],):
-            raise InvalidValueError(
-                f"The 'kernel' parameter of {self.owner} must return shape "
-                f"({flat.shape[0]},) for u of shape {flat.shape}. Got shape {w.shape} instead."
-            )
-        if not np.all(np.isfinite(w)):
-            raise InvalidValueError(
-                f"The 'kernel' parameter of {self.owner} must return finite values. "
-                "Got non-finite values instead."
-            )
+        expected = f"shape ({flat.shape[0]},) for u of shape {flat.shape}"
+        w = callable_output(kernel(flat), "kernel", self.owner, (flat.shape[0],), expected)
         W: F64 = np.ascontiguousarray(w.reshape(X.shape[0], Q.shape[0]) * scale[:, None])
         return W
 

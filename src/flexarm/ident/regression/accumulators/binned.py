@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ...._types import F64
 from .. import binning
 from ..kernels import KERNELS
 from . import _loops
@@ -16,7 +17,6 @@ from .base import GridAccumulator, Smoothing, State
 
 __all__ = ["BIN_MAX_BINS", "BinnedSums"]
 
-F64 = NDArray[np.float64]
 
 #: A block needing more bins than this is added exactly.
 BIN_MAX_BINS = 2**24

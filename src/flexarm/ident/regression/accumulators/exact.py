@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ...._types import F64
 from ..kernels import SERIES_TERMS, SERIES_WIDTH, gauss_series_eval, gauss_series_moments
 from . import _loops
 from ._threads import run_split, workers
@@ -16,7 +17,6 @@ from .series import far_points
 
 __all__ = ["ExactSamples"]
 
-F64 = NDArray[np.float64]
 _KEYS = ("X", "y", "h", "scale")
 #: Exact mode sums directly when the series would need more clusters than this.
 EXACT_SERIES_MAX_CLUSTERS = 2**18

@@ -3,15 +3,13 @@
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
+from ...._types import F64
 from . import _loops
 from ._threads import run_split, workers
 from .base import CALLABLE, BlockedAccumulator
 
 __all__ = ["GridSums"]
-
-F64 = NDArray[np.float64]
 
 
 class GridSums(BlockedAccumulator):

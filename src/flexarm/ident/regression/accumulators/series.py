@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ...._types import F64
 from ..kernels import (
     SERIES_REACH,
     SERIES_TERMS,
@@ -49,7 +50,6 @@ __all__ = [
     "series_clusters",
 ]
 
-F64 = NDArray[np.float64]
 
 #: Grid mode: (grid span + 2 reach) / (h/8) clusters at most.
 SERIES_MAX_CLUSTERS = 2**22
