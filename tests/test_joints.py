@@ -18,6 +18,7 @@ import flexarm as fa
 from flexarm.model import dynamics
 from flexarm.model.arrays import make_workspace
 from flexarm.model.joints import LinearJoint, MakkarFriction, NonlinearJoint
+from helpers.arms import assert_mass_matrix_and_kernels
 
 
 def simulate(arm, x0, t_end, torque=None, n_eval=201, rtol=1e-11, atol=1e-12):
@@ -352,15 +353,7 @@ def test_rigid_joints_add_their_geared_rotors_by_hand(coupled):
         expected[0, 0] += jr2
         expected[0, 1] += n2 * jr2
         expected[1, 0] += n2 * jr2
-    for backend in ("compiled", "numpy"):
-        np.testing.assert_allclose(arm.mass_matrix(q, backend=backend), expected, rtol=1e-13)
-    rng = np.random.default_rng(4)
-    dq, tau = rng.normal(size=2), rng.normal(size=2)
-    ref = arm.forward_dynamics(q, dq, tau, backend="numpy")
-    for kernel in (dynamics.forward_dynamics_dense, dynamics.forward_dynamics_recursive):
-        out = np.empty(2)
-        kernel(q, dq, tau, arm.arrays, make_workspace(2), out)
-        np.testing.assert_allclose(out, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
+    assert_mass_matrix_and_kernels(arm, q, expected, seed=4)
     assert not dynamics.is_two_links_one_mode(arm.arrays)
 
 

@@ -17,8 +17,7 @@ import pytest
 from scipy.optimize import brentq
 
 import flexarm as fa
-from flexarm.model import dynamics
-from flexarm.model.arrays import make_workspace
+from helpers.arms import assert_mass_matrix_and_kernels
 
 
 def two_link_mass_matrix(bodies1, bodies2, l1, theta2):
@@ -51,15 +50,7 @@ def test_two_rigid_links_with_tip_bodies_have_the_textbook_mass_matrix(theta2):
     # link 2: its body, its tip body and the payload at its tip
     bodies2 = [(0.56, 0.3, 0.02), (0.1, l2, 0.003), (0.07, l2, 0.001)]
     expected = two_link_mass_matrix(bodies1, bodies2, l1, theta2)
-    for backend in ("compiled", "numpy"):
-        np.testing.assert_allclose(arm.mass_matrix(q, backend=backend), expected, rtol=1e-13)
-    rng = np.random.default_rng(2)
-    dq, tau = rng.normal(size=2), rng.normal(size=2)
-    ref = arm.forward_dynamics(q, dq, tau, backend="numpy")
-    for kernel in (dynamics.forward_dynamics_dense, dynamics.forward_dynamics_recursive):
-        out = np.empty(2)
-        kernel(q, dq, tau, arm.arrays, make_workspace(2), out)
-        np.testing.assert_allclose(out, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
+    dq = assert_mass_matrix_and_kernels(arm, q, expected, seed=2)
     # the velocity terms of the same bodies: h = C dq with the textbook Christoffel form
     s2 = math.sin(theta2)
     hh = sum(m * l1 * lc for m, lc, _ in bodies2) * s2

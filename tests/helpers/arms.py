@@ -16,6 +16,7 @@ import flexarm as fa
 
 __all__ = [
     "LINEAR_CLAMPED_FREE",
+    "assert_mass_matrix_and_kernels",
     "random_state",
     "random_states",
     "three_links",
@@ -95,3 +96,25 @@ def random_states(
             dq[:, arm.motor_slice] += rng.normal(size=(m, nl))
     tau = rng.uniform(-5.0, 5.0, (m, nl))
     return q, dq, tau
+
+
+def assert_mass_matrix_and_kernels(
+    arm: fa.FlexibleArm, q: np.ndarray, expected: np.ndarray, seed: int
+) -> np.ndarray:
+    """``arm``'s mass matrix at ``q`` is ``expected`` (a hand-derived oracle) on both
+    backends, and the dense and recursive kernels give the NumPy forward dynamics at a
+    seeded random rate and torque; returns that rate."""
+    from flexarm.model import dynamics
+    from flexarm.model.arrays import make_workspace
+
+    for backend in ("compiled", "numpy"):
+        np.testing.assert_allclose(arm.mass_matrix(q, backend=backend), expected, rtol=1e-13)
+    rng = np.random.default_rng(seed)
+    n = arm.n_dof
+    dq, tau = rng.normal(size=n), rng.normal(size=arm.n_links)
+    ref = arm.forward_dynamics(q, dq, tau, backend="numpy")
+    for kernel in (dynamics.forward_dynamics_dense, dynamics.forward_dynamics_recursive):
+        out = np.empty(n)
+        kernel(q, dq, tau, arm.arrays, make_workspace(n), out)
+        np.testing.assert_allclose(out, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
+    return dq
