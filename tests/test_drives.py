@@ -84,3 +84,50 @@ def test_an_arm_with_drives_turns_currents_into_joint_torques():
         fa.FlexibleArm(links, drives=[drive, 1.0])
     with pytest.raises(ValueError, match=r"'inputs'.*2 entries"):
         arm.joint_torques([1.0, 2.0, 3.0])
+
+
+def _driven_arm() -> fa.FlexibleArm:
+    drive = Drive(**STAGE1, current_limit=1.0, current_offset=0.02)
+    return fa.FlexibleArm([fa.Link(1.0, 1.0, 1.0, n_modes=0)] * 2, drives=[drive, None])
+
+
+def test_an_open_loop_run_takes_motor_currents_through_the_drives():
+    """simulate_open_loop(current=...) is the run of the torques worked out by hand
+    (8.925 N m/A on the driven joint after the offset, clipped at 1 A; the other
+    joint's column is its torque), held between samples; a single rigid rod of
+    inertia J = rho L**3 / 3 under a constant current turns by tau t**2 / (2 J)."""
+    arm = _driven_arm()
+    t = np.linspace(0.0, 0.5, 51)
+    rng = np.random.default_rng(4)
+    current = rng.uniform(-2.0, 2.0, size=(51, 2))
+    by_hand = current.copy()
+    by_hand[:, 0] = 8.925 * np.clip(current[:, 0] - 0.02, -1.0, 1.0)
+    driven = fa.simulate_open_loop(arm, t, current=current)
+    torqued = fa.simulate_open_loop(arm, t, by_hand)
+    np.testing.assert_allclose(driven.tau, by_hand, rtol=1e-14, atol=1e-14)
+    np.testing.assert_allclose(driven.q, torqued.q, rtol=1e-12, atol=1e-14)
+    assert driven.info["torque"] == "current samples"
+    rod = fa.FlexibleArm([fa.Link(1.0, 10.0, 3.0, n_modes=0)], drives=[Drive(**STAGE1)])
+    res = fa.simulate_open_loop(rod, t, current=np.full(51, 0.1))
+    # tau = 0.8925 N m, J = 3 x 1 / 3 = 1 kg m**2 (no rotor inertia on the joint)
+    assert res.q[-1, 0] == pytest.approx(0.8925 * 0.5**2 / 2, rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"torque": np.zeros((3, 2)), "current": np.zeros((3, 2))}, "one of them"),
+        ({}, "'torque' or a 'current'"),
+        ({"current": np.zeros((4, 2))}, r"'current'.*\(3, 2\)"),
+        ({"current": np.full((3, 2), np.nan)}, "'current'"),
+    ],
+)
+def test_an_open_loop_run_refuses_a_bad_current(kwargs, match):
+    with pytest.raises(InvalidValueError, match=match):
+        fa.simulate_open_loop(_driven_arm(), np.linspace(0.0, 0.02, 3), **kwargs)
+
+
+def test_currents_need_an_arm_with_drives():
+    arm = fa.FlexibleArm([fa.Link(1.0, 1.0, 1.0, n_modes=0)] * 2)
+    with pytest.raises(InvalidValueError, match=r"'current'.*drives"):
+        fa.simulate_open_loop(arm, np.linspace(0.0, 0.02, 3), current=np.zeros((3, 2)))

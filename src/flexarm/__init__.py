@@ -47,6 +47,7 @@ _SUBPACKAGES = (
 )
 _NAMES = {
     "BeamModes": "model.beam",
+    "Drive": "model.drives",
     "FlexibleArm": "model.arm",
     "LinearJoint": "model.joints",
     "Link": "model.link",
@@ -72,6 +73,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; nothing is imported at run
     from .calibration.result import calibrate as calibrate
     from .model.arm import FlexibleArm as FlexibleArm
     from .model.beam import BeamModes as BeamModes
+    from .model.drives import Drive as Drive
     from .model.joints import (
         LinearJoint as LinearJoint,
     )

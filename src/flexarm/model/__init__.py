@@ -32,6 +32,7 @@ _SUBMODULES = (
     "arm",
     "arrays",
     "beam",
+    "drives",
     "dynamics",
     "foreshortening",
     "gravity",
@@ -46,6 +47,7 @@ _SUBMODULES = (
 )
 _NAMES = {
     "BeamModes": "beam",
+    "Drive": "drives",
     "FlexibleArm": "arm",
     "LinearJoint": "joints",
     "Link": "link",
@@ -65,6 +67,7 @@ if TYPE_CHECKING:  # what type checkers see; nothing is imported at run time
     from .beam import BeamModes as BeamModes
     from .beam import cantilever_roots as cantilever_roots
     from .beam import clamped_mass_roots as clamped_mass_roots
+    from .drives import Drive as Drive
     from .joints import LinearJoint as LinearJoint
     from .joints import MakkarFriction as MakkarFriction
     from .joints import NonlinearJoint as NonlinearJoint

@@ -228,11 +228,32 @@ def _torque_source(
     return -1, np.ascontiguousarray(table, dtype=float), _no_source, "samples"
 
 
+def _drive_torques(arm: Plant, current: ArrayLike, k_rows: int) -> F64:
+    """The joint torques (N m) of motor-current samples through ``arm``'s drives."""
+    drives = getattr(arm, "drives", None)
+    if drives is None:
+        raise InvalidValueError(
+            f"The 'current' parameter of {_OWNER} needs an arm with drives "
+            "(FlexibleArm(drives=...)); this arm has none: give 'torque' instead."
+        )
+    n_links = arm.n_links
+    samples = check_array(current, "current", _OWNER, real=True)
+    if samples.ndim == 1 and n_links == 1:
+        samples = samples[:, None]
+    if samples.shape != (k_rows, n_links):
+        raise InvalidValueError(
+            f"The 'current' parameter of {_OWNER} must be of shape ({k_rows}, {n_links}) "
+            f"(one row per time, A). Got shape {samples.shape} instead."
+        )
+    return cast(F64, arm.joint_torques(samples))  # type: ignore[attr-defined]
+
+
 def simulate_open_loop(
     arm: Plant,
     t: ArrayLike,
-    torque: ArrayLike | TorqueFunction,
+    torque: ArrayLike | TorqueFunction | None = None,
     *,
+    current: ArrayLike | None = None,
     initial_state: ArrayLike | None = None,
     interpolation: str = "zoh",
     substeps: int | str = "auto",
@@ -253,7 +274,14 @@ def simulate_open_loop(
         ``t`` (a 1-D array for a one-link arm), or a function of time —
         a ``numba.njit`` function ``f(t, tau)`` writing ``tau`` (called inside
         the compiled loop), or any Python callable ``f(t) -> tau`` (evaluated
-        beforehand at every time the integrator needs).
+        beforehand at every time the integrator needs). Give ``torque`` or
+        ``current``, one of them.
+    current : array_like, shape (K, n_links), optional
+        Motor currents in A, samples at ``t``, for an arm built with drives
+        (``FlexibleArm(drives=...)``): each sample becomes the joint torque of
+        :meth:`~flexarm.model.arm.FlexibleArm.joint_torques` (the drive's gain,
+        offset and current limit; a joint without a drive takes its column as a
+        torque), then held or interpolated as torque samples are.
     initial_state : array_like, shape (2 n_dof,), optional
         ``(q, dq)`` at ``t[0]`` (default: at rest, all zero).
     interpolation : {"zoh", "linear"}
@@ -303,7 +331,17 @@ def simulate_open_loop(
     else:
         x0 = check_array(initial_state, "initial_state", _OWNER, shape=(2 * n,))
     substeps = check_substeps(arm, dt, substeps, _OWNER, x0[:n])
+    if current is not None:
+        if torque is not None:
+            raise InvalidValueError(
+                f"{_OWNER} takes a 'torque' or a 'current', one of them. Got both instead."
+            )
+        torque = _drive_torques(arm, current, grid.shape[0])
+    elif torque is None:
+        raise InvalidValueError(f"{_OWNER} takes a 'torque' or a 'current'. Got neither.")
     mode, table, source, kind = _torque_source(torque, grid, substeps, n_links)
+    if current is not None:
+        kind = "current samples"
     if mode < 0:
         mode = _HOLD if interpolation == "zoh" else _LINEAR
     if max_deflection is None:
@@ -355,7 +393,7 @@ def simulate_open_loop(
         head={
             "controller": "open loop",
             "torque": kind,
-            "interpolation": interpolation if kind == "samples" else "exact",
+            "interpolation": interpolation if kind.endswith("samples") else "exact",
         },
         dt=dt,
         substeps=substeps,
