@@ -22,8 +22,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
+from .._io import json_ready
 from ..control.adaptive import FuzzyAdaptiveJTPD
 from ..control.controllers import Controller, JacobianTransposePD, JointPD
 from ..control.custom import call_factory, is_factory_spec, load_factory
@@ -218,7 +217,7 @@ class Scenario:
             trajectory=trajectory,
             simulation=settings,
             source=source,
-            description=_plain(description),
+            description=json_ready(description),
         )
 
     def simulate_kwargs(self) -> dict[str, Any]:
@@ -594,16 +593,3 @@ def _simulation(
             f"Got {len(limit)} values instead.",
         )
     return settings, {k: getattr(settings, k) for k in SimulationSettings.FILE_KEYS}
-
-
-def _plain(value: Any) -> Any:
-    """JSON-ready copy: tuples and arrays to lists, NumPy scalars to Python."""
-    if isinstance(value, Mapping):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _plain(value.tolist())
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
