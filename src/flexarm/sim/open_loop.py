@@ -172,24 +172,41 @@ def run_open_loop(
     return OK, k1
 
 
-def _time_grid(t: ArrayLike) -> tuple[F64, float]:
-    """``t`` checked: 1-D, finite, at least two samples, increasing, evenly spaced."""
-    grid = check_array(t, "t", _OWNER, shape=(-1,))
+def _time_grid(t: ArrayLike, owner: str = _OWNER) -> tuple[F64, float]:
+    """``t`` checked: 1-D, finite, at least two samples, increasing, evenly spaced;
+    with its step ``dt``, s."""
+    grid = check_array(t, "t", owner, shape=(-1,))
     if grid.shape[0] < 2:
         raise InvalidValueError(
-            f"The 't' parameter of {_OWNER} must hold at least 2 times. "
-            f"Got {grid.shape[0]} instead."
+            f"The 't' parameter of {owner} must hold at least 2 times. Got {grid.shape[0]} instead."
         )
     dt = float(grid[-1] - grid[0]) / (grid.shape[0] - 1)
     steps = np.diff(grid)
     tol = 1e-9 * dt + 8 * np.finfo(float).eps * float(np.max(np.abs(grid)))
     if not dt > 0 or np.any(np.abs(steps - dt) > tol):
         raise InvalidValueError(
-            f"The 't' parameter of {_OWNER} must be increasing and evenly spaced (the "
+            f"The 't' parameter of {owner} must be increasing and evenly spaced (the "
             f"fixed-step integrator steps through it). Got steps from {steps.min():.6g} to "
             f"{steps.max():.6g} s instead."
         )
     return grid, dt
+
+
+def _half_substep_times(t: F64, substeps: int) -> F64:
+    """The start, middle and end of every RK4 substep over the grid ``t`` (s): the
+    times, shape ``(2 (K - 1) substeps + 1,)``, at which a function of time is
+    evaluated beforehand."""
+    h = (t[1] - t[0]) / substeps
+    return t[0] + 0.5 * h * np.arange(2 * (t.shape[0] - 1) * substeps + 1)
+
+
+def _deflection_limits(arm: Plant, max_deflection: float | None, owner: str) -> F64:
+    """The tip deflection of each link (m, shape (n_links,)) beyond which a run counts
+    as diverged: ``max_deflection`` for all, or by default each link's length."""
+    if max_deflection is None:
+        return np.array(arm.link_lengths, dtype=float)
+    limit = check_real(max_deflection, "max_deflection", owner, positive=True)
+    return np.full(arm.n_links, limit)
 
 
 def _torque_source(
@@ -200,8 +217,7 @@ def _torque_source(
         compiled = wrap_torque_function(cast(Callable[..., None], torque))
         return _FUNCTION, np.zeros((1, n_links)), compiled, "compiled function"
     if callable(torque):
-        h = (t[1] - t[0]) / substeps
-        times = t[0] + 0.5 * h * np.arange(2 * (t.shape[0] - 1) * substeps + 1)
+        times = _half_substep_times(t, substeps)
         table = np.empty((times.shape[0], n_links))
         for j, tj in enumerate(times):
             row = np.asarray(torque(float(tj)), dtype=float)
@@ -344,12 +360,7 @@ def simulate_open_loop(
         kind = "current samples"
     if mode < 0:
         mode = _HOLD if interpolation == "zoh" else _LINEAR
-    if max_deflection is None:
-        max_defl = np.array(arm.link_lengths, dtype=float)
-    else:
-        max_defl = np.full(
-            n_links, check_real(max_deflection, "max_deflection", _OWNER, positive=True)
-        )
+    max_defl = _deflection_limits(arm, max_deflection, _OWNER)
     check_bool(progress, "progress", _OWNER, optional=True)
     k_rows = grid.shape[0]
     state = OpenLoopState(

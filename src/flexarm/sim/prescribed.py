@@ -29,7 +29,7 @@ from ..model.plant import Plant, check_plant
 from ..model.prescribed import free_range, prescribed_dynamics
 from . import _rk4
 from .chunks import DIVERGED, OK
-from .open_loop import open_loop_result
+from .open_loop import _deflection_limits, _half_substep_times, _time_grid, open_loop_result
 from .results import SimulationResult
 from .step_check import check_substeps
 
@@ -194,8 +194,7 @@ def _motion_table(motion: JointMotion, t: F64, substeps: int, n_links: int) -> F
             f"The 'motion' parameter of {_OWNER} must be a function of time returning "
             f"(theta, dtheta, ddtheta). Got {type(motion).__name__} instead."
         )
-    h = (t[1] - t[0]) / substeps
-    times = t[0] + 0.5 * h * np.arange(2 * (t.shape[0] - 1) * substeps + 1)
+    times = _half_substep_times(t, substeps)
     out = motion(times)
     if not isinstance(out, tuple) or len(out) != 3:
         raise InvalidValueError(
@@ -278,17 +277,7 @@ def simulate_prescribed(
     0.333333
     """
     arm = check_plant(arm, _OWNER)
-    grid = check_array(t, "t", _OWNER, shape=(-1,))
-    if grid.shape[0] < 2:
-        raise InvalidValueError(
-            f"The 't' parameter of {_OWNER} must hold at least 2 times. Got {grid.shape[0]}."
-        )
-    dt = float(grid[-1] - grid[0]) / (grid.shape[0] - 1)
-    if not dt > 0 or np.any(np.abs(np.diff(grid) - dt) > 1e-9 * dt + 1e-12 * abs(grid[-1])):
-        raise InvalidValueError(
-            f"The 't' parameter of {_OWNER} must be increasing and evenly spaced. "
-            f"Got steps from {np.diff(grid).min():.6g} to {np.diff(grid).max():.6g} s instead."
-        )
+    grid, dt = _time_grid(t, _OWNER)
     if substeps != "auto":
         substeps = check_int(substeps, "substeps", _OWNER, minimum=1)
     n, n_links = arm.n_dof, arm.n_links
@@ -308,11 +297,7 @@ def simulate_prescribed(
     if initial_state is None and arm.has_flexible_joints:
         x0[:n_links] = table[0, 0]
         x0[n : n + n_links] = table[0, 1]
-    if max_deflection is None:
-        max_defl = np.array(arm.link_lengths, dtype=float)
-    else:
-        limit = check_real(max_deflection, "max_deflection", _OWNER, positive=True)
-        max_defl = np.full(n_links, limit)
+    max_defl = _deflection_limits(arm, max_deflection, _OWNER)
     k_rows = grid.shape[0]
     q_state, dq_state = np.array(x0[:n], dtype=float), np.array(x0[n:], dtype=float)
     ws, scratch, tau_s = make_workspace(n), np.zeros((6, n)), np.zeros(n_links)
