@@ -48,7 +48,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validation import check_int, check_real, validate_real_fields
+from .._validation import check_int, check_option, check_real, validate_real_fields
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.plant import Plant
 
@@ -67,17 +67,11 @@ SENSOR_MODELS = ("physical", "paper")
 """Models of a sensed point: the deflected point, or the paper's rigid kinematics."""
 
 
-def _check_model(sensor: object, owner: str) -> None:
-    model = getattr(sensor, "model", None)
-    if not isinstance(model, str):
-        raise InvalidTypeError(
-            f"The 'model' parameter of {owner} must be a str. Got {type(model).__name__} instead."
-        )
-    if model not in SENSOR_MODELS:
-        raise InvalidValueError(
-            f"The 'model' parameter of {owner} must be one of {SENSOR_MODELS}. "
-            f"Got {model!r} instead."
-        )
+def _check_fields(sensor: object, owner: str, *nonnegative: str) -> None:
+    """Check a sensor's noise and quantisation fields (and ``nonnegative`` others,
+    stored as floats) and its ``model``."""
+    validate_real_fields(sensor, owner, nonnegative=(*nonnegative, *_NOISE_FIELDS))
+    check_option(getattr(sensor, "model", None), "model", owner, SENSOR_MODELS)
 
 
 @dataclass(frozen=True)
@@ -108,8 +102,7 @@ class JointSensor:
     name = "joint"
 
     def __post_init__(self) -> None:
-        validate_real_fields(self, "JointSensor", nonnegative=_NOISE_FIELDS)
-        _check_model(self, "JointSensor")
+        _check_fields(self, "JointSensor")
 
     def resolve(self, arm: Plant) -> tuple[int, float, NDArray[np.float64]]:
         """``(link, distance, mode shapes at the point)``; link -1 means collocated."""
@@ -149,8 +142,7 @@ class PointSensor:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "link", check_int(self.link, "link", "PointSensor", minimum=0))
-        validate_real_fields(self, "PointSensor", nonnegative=("distance", *_NOISE_FIELDS))
-        _check_model(self, "PointSensor")
+        _check_fields(self, "PointSensor", "distance")
 
     def resolve(self, arm: Plant) -> tuple[int, float, NDArray[np.float64]]:
         if self.link >= arm.n_links:
@@ -190,8 +182,7 @@ class TipSensor:
     name = "tip"
 
     def __post_init__(self) -> None:
-        validate_real_fields(self, "TipSensor", nonnegative=_NOISE_FIELDS)
-        _check_model(self, "TipSensor")
+        _check_fields(self, "TipSensor")
 
     def at(self, arm: Plant) -> PointSensor:
         last = arm.n_links - 1
