@@ -24,7 +24,7 @@ undelayed), which the pipeline returns beside ``r``.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, NamedTuple, Protocol
+from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -534,37 +534,17 @@ def _central_differences(v: F64, dt: float, e0: int, b0: int, b1: int, n_rows: i
 
 
 def reference_signals(
-    arm: KinematicArm,
-    trajectory: Trajectory,
-    t: F64,
-    *,
-    shaper: PathShaper | None = None,
-    delay: float = 0.0,
-    point: tuple[int, float] | None = None,
-    elbow: str = "positive",
-    singularity_tol: float = 1e-6,
-    feedforward: Feedforward | None = None,
-    smoothing: float = 0.0,
-    owner: str = "simulate",
+    arm: KinematicArm, trajectory: Trajectory, t: F64, **options: Any
 ) -> ReferenceSignals:
     """The reference ``r`` at all the control instants ``t = k dt`` of a run at once
-    (:class:`ReferencePipeline`, whose parameters these are; ``t`` must be
-    ``arange(K) * dt``)."""
+    (``t`` must be ``arange(K) * dt``).
+
+    ``options`` are the keyword parameters of :class:`ReferencePipeline`
+    (``shaper``, ``delay``, ``point``, ``elbow``, ``singularity_tol``,
+    ``feedforward``, ``smoothing``, ``owner``); any other raises TypeError.
+    """
     dt = float(t[1] - t[0]) if t.shape[0] > 1 else 1.0
-    pipeline = ReferencePipeline(
-        arm,
-        trajectory,
-        dt,
-        t.shape[0] - 1,
-        shaper=shaper,
-        delay=delay,
-        point=point,
-        elbow=elbow,
-        singularity_tol=singularity_tol,
-        feedforward=feedforward,
-        smoothing=smoothing,
-        owner=owner,
-    )
+    pipeline = ReferencePipeline(arm, trajectory, dt, t.shape[0] - 1, **options)
     r, desired = pipeline.rows(0, t.shape[0])
     return ReferenceSignals(reference=r, desired=desired, initial_angles=pipeline.initial_angles)
 
