@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._types import F64
-from .._validation import check_array, check_option, check_real
+from .._validation import check_array, check_bool, check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arm import FlexibleArm
 from ..model.kinematics import lever_lengths, rigid_jacobian, rigid_point
@@ -179,12 +179,7 @@ def closed_loop_matrix(
         return np.concatenate([dq, arm.forward_dynamics(q, dq, tau)])
 
     x0 = np.concatenate([q0, np.zeros(n)])
-    a = np.empty((2 * n, 2 * n))
-    for j in range(2 * n):
-        e = np.zeros(2 * n)
-        e[j] = step * max(1.0, abs(x0[j]))
-        a[:, j] = (field(x0 + e) - field(x0 - e)) / (2 * e[j])
-    return a
+    return _central_jacobian(field, x0, step * np.maximum(1.0, np.abs(x0)))
 
 
 def closed_loop_poles(
@@ -235,14 +230,20 @@ def _damping(arm: FlexibleArm) -> F64:
     return d
 
 
+def _central_jacobian(fn: Callable[[F64], F64], x0: F64, steps: F64) -> F64:
+    """``d fn / d x`` at ``x0`` by central differences, ``steps[j]`` along ``x_j``
+    (fn: (m,) -> (k,); the result has shape (k, m))."""
+    cols = []
+    for j in range(x0.shape[0]):
+        e = np.zeros_like(x0)
+        e[j] = steps[j]
+        cols.append((fn(x0 + e) - fn(x0 - e)) / (2 * e[j]))
+    return np.stack(cols, axis=1)
+
+
 def _position_jacobian(fn: Callable[[F64], F64], q0: F64, step: float = 1e-6) -> F64:
     """``d fn / d q`` at ``q0`` by central differences (fn: (n_dof,) -> (k,))."""
-    cols = []
-    for j in range(q0.shape[0]):
-        e = np.zeros_like(q0)
-        e[j] = step
-        cols.append((fn(q0 + e) - fn(q0 - e)) / (2 * step))
-    return np.stack(cols, axis=1)
+    return _central_jacobian(fn, q0, np.full(q0.shape[0], step))
 
 
 def linearize(
@@ -297,8 +298,7 @@ def linearize(
         )
     check_option(output, "output", owner, OUTPUTS)
     sensor = check_sensor(sensor, owner)
-    if not isinstance(rates, bool):
-        raise InvalidTypeError(f"The 'rates' parameter of {owner} must be a bool. Got {rates!r}.")
+    check_bool(rates, "rates", owner)
     n, n_links = arm.n_dof, arm.n_links
     if position is not None:
         if theta is not None:
