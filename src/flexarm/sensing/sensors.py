@@ -75,7 +75,22 @@ def _check_fields(sensor: object, owner: str, *nonnegative: str) -> None:
 
 
 @dataclass(frozen=True)
-class JointSensor:
+class _Channels:
+    """The fields of a sensor that is no more than its noise, quantisation and model
+    (:class:`JointSensor`, :class:`TipSensor`), checked alike."""
+
+    noise_std: float = 0.0
+    rate_noise_std: float = 0.0
+    quantization: float = 0.0
+    rate_quantization: float = 0.0
+    model: str = "physical"
+
+    def __post_init__(self) -> None:
+        _check_fields(self, type(self).__name__)
+
+
+@dataclass(frozen=True)
+class JointSensor(_Channels):
     """Joint encoders (collocated).
 
     Parameters
@@ -94,15 +109,7 @@ class JointSensor:
         of the joint angles, which is what the law reads from encoders anyway).
     """
 
-    noise_std: float = 0.0
-    rate_noise_std: float = 0.0
-    quantization: float = 0.0
-    rate_quantization: float = 0.0
-    model: str = "physical"
     name = "joint"
-
-    def __post_init__(self) -> None:
-        _check_fields(self, "JointSensor")
 
     def resolve(self, arm: Plant) -> tuple[int, float, NDArray[np.float64]]:
         """``(link, distance, mode shapes at the point)``; link -1 means collocated."""
@@ -169,20 +176,12 @@ class PointSensor:
 
 
 @dataclass(frozen=True)
-class TipSensor:
+class TipSensor(_Channels):
     """The end effector: the last link's tip (same parameters as
     :class:`PointSensor`; ``model="paper"`` is the paper's end-effector sensor,
     the rigid kinematics of the measured joint angles)."""
 
-    noise_std: float = 0.0
-    rate_noise_std: float = 0.0
-    quantization: float = 0.0
-    rate_quantization: float = 0.0
-    model: str = "physical"
     name = "tip"
-
-    def __post_init__(self) -> None:
-        _check_fields(self, "TipSensor")
 
     def at(self, arm: Plant) -> PointSensor:
         last = arm.n_links - 1
