@@ -92,12 +92,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import (
     check_array,
+    check_bool,
     check_option,
     check_real,
     check_sequence_of,
     validate_real_fields,
 )
-from ..errors import InvalidTypeError, InvalidValueError
+from ..errors import InvalidValueError
 from .arrays import ArmArrays
 from .backends import Backends
 from .beam import NORMALIZATIONS, BeamModes
@@ -221,11 +222,7 @@ class FlexibleArm(RigidKinematics, Backends):
         if self.drives is not None:
             set_(self, "drives", check_drives(self.drives, len(links), _OWNER))
         for flag in ("rotor_coupling", "geometric_stiffening"):
-            if not isinstance(getattr(self, flag), bool):
-                raise InvalidTypeError(
-                    f"The '{flag}' parameter of {_OWNER} must be a bool. "
-                    f"Got {getattr(self, flag)!r} instead."
-                )
+            check_bool(getattr(self, flag), flag, _OWNER)
         check_option(self.mode_normalization, "mode_normalization", _OWNER, NORMALIZATIONS)
         set_(self, "gravity", check_gravity(self.gravity, _OWNER))
         set_(
@@ -425,11 +422,7 @@ class FlexibleArm(RigidKinematics, Backends):
         K = np.diag(self.arrays.stiffness)
         m = self.motor_slice.start
         for i, jt in enumerate(self._springs):
-            k = float(jt.tangent_stiffness(0.0))
-            K[i, i] += k
-            K[m + i, m + i] += k
-            K[i, m + i] -= k
-            K[m + i, i] -= k
+            _add_across(K, i, m + i, float(jt.tangent_stiffness(0.0)))
         return K
 
     @property
@@ -441,11 +434,7 @@ class FlexibleArm(RigidKinematics, Backends):
         m = self.motor_slice.start
         for i, jt in enumerate(self._springs):
             D[m + i, m + i] += jt.motor_damping
-            c = jt.damping
-            D[i, i] += c
-            D[m + i, m + i] += c
-            D[i, m + i] -= c
-            D[m + i, i] -= c
+            _add_across(D, i, m + i, jt.damping)
         return D
 
     @property
@@ -643,3 +632,13 @@ def _no_modes(length: float) -> BeamModes:
     """The empty modal basis of a rigid link of ``length`` m: no modes, so the beam's
     stiffness and density never enter (placeholders of 1)."""
     return BeamModes(length, 1.0, 1.0, 0)
+
+
+def _add_across(matrix: NDArray[np.float64], i: int, j: int, value: float) -> None:
+    """Add, in place, a linear element of coefficient ``value`` acting across
+    coordinates ``i`` and ``j`` (a joint's spring or damper between its link angle
+    and its motor angle): ``+value`` on both diagonals, ``-value`` off them."""
+    matrix[i, i] += value
+    matrix[j, j] += value
+    matrix[i, j] -= value
+    matrix[j, i] -= value
