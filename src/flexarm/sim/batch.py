@@ -41,7 +41,7 @@ from collections.abc import Callable, Iterable, Iterator, Mapping
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 
 from .._validation import check_int, check_option
-from ..errors import InvalidTypeError, InvalidValueError
+from ..errors import InvalidTypeError
 from .closed_loop import simulate
 from .results import SimulationResult
 
@@ -115,11 +115,9 @@ def iter_simulations(
         The run's position in ``runs``.
     outcome : SimulationResult or Exception
     """
-    n_workers = default_workers() if workers is None else check_int(workers, "workers", _OWNER)
-    if n_workers < 1:
-        raise InvalidValueError(
-            f"The 'workers' parameter of {_OWNER} must be >= 1. Got {workers!r} instead."
-        )
+    n_workers = (
+        default_workers() if workers is None else check_int(workers, "workers", _OWNER, minimum=1)
+    )
     check_option(errors, "errors", _OWNER, ("return", "raise"))
     total = len(runs) if hasattr(runs, "__len__") else None  # type: ignore[arg-type]
     show = (sys.stderr.isatty() and total != 1) if progress is None else bool(progress)

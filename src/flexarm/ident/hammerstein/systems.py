@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..._types import F64
-from ..._validation import check_array, check_real, check_rng, validate_real_fields
+from ..._validation import check_array, check_int, check_real, check_rng, validate_real_fields
 from ...errors import InvalidTypeError, InvalidValueError
 from .._estimator import callable_output
 
@@ -408,11 +408,7 @@ class ARMA:
 
     def impulse_response(self, n: int) -> F64:
         """``lambda_0, ..., lambda_{n-1}``: the response to a unit impulse, shape (n,)."""
-        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
-            raise InvalidValueError(
-                f"The 'n' parameter of ARMA.impulse_response must be >= 1. Got {n!r} instead."
-            )
-        delta = np.zeros(int(n))
+        delta = np.zeros(check_int(n, "n", "ARMA.impulse_response", minimum=1))
         delta[0] = 1.0
         return self.filter(delta)
 
