@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import check_array, check_real
 from ..errors import InvalidTypeError, InvalidValueError
+from .joints import check_gear_ratio
 
 __all__ = ["Drive", "check_drives", "drive_torques"]
 
@@ -72,13 +73,7 @@ class Drive:
             "torque_constant",
             check_real(self.torque_constant, "torque_constant", owner, positive=True),
         )
-        ratio = check_real(self.gear_ratio, "gear_ratio", owner, positive=True)
-        if ratio < 1.0:
-            raise InvalidValueError(
-                f"The 'gear_ratio' parameter of {owner} must be >= 1 (motor turns per joint "
-                f"turn). Got {ratio} instead."
-            )
-        set_(self, "gear_ratio", ratio)
+        set_(self, "gear_ratio", check_gear_ratio(self.gear_ratio, owner))
         eta = check_real(self.efficiency, "efficiency", owner, positive=True)
         if eta > 1.0:
             raise InvalidValueError(

@@ -430,14 +430,20 @@ Joint = LinearJoint | NonlinearJoint
 """A flexible joint (a spring between motor and link)."""
 
 
-def _check_gear_ratio(joint: LinearJoint | NonlinearJoint | RigidJoint, owner: str) -> None:
-    ratio = check_real(joint.gear_ratio, "gear_ratio", owner, positive=True)
+def check_gear_ratio(value: object, owner: str) -> float:
+    """``value`` as a gear ratio ``N >= 1`` (motor turns per joint turn), or raise
+    naming ``owner``: a joint's, or a drive's."""
+    ratio = check_real(value, "gear_ratio", owner, positive=True)
     if ratio < 1.0:
         raise InvalidValueError(
             f"The 'gear_ratio' parameter of {owner} must be >= 1 (motor turns per joint "
             f"turn). Got {ratio} instead."
         )
-    object.__setattr__(joint, "gear_ratio", ratio)
+    return ratio
+
+
+def _check_gear_ratio(joint: LinearJoint | NonlinearJoint | RigidJoint, owner: str) -> None:
+    object.__setattr__(joint, "gear_ratio", check_gear_ratio(joint.gear_ratio, owner))
 
 
 def _check_friction_side(side: object, owner: str) -> None:
