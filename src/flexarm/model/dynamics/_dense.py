@@ -100,6 +100,23 @@ def rigid_joint_friction(dq: F64, arrays: ArmArrays, rhs: F64) -> None:  # pragm
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
+def _add_rotor(
+    inertia: float, coupling: float, k: int, rows: int, A: F64, M: F64
+) -> None:  # pragma: no cover - compiled
+    """A rotor of ``inertia`` (kg m**2) on coordinate ``k``, turning at ``coupling``
+    (1 / N) times its carrier's angular rate, whose gradient is ``A[:rows]``, plus
+    ``dq_k``: its terms added to the lower triangle of ``M`` (row ``k`` and the
+    carrier's block)."""
+    M[k, k] += inertia
+    if coupling != 0.0:
+        for r in range(rows):
+            ar = inertia * coupling * A[r]
+            M[k, r] += ar
+            for c in range(r + 1):
+                M[r, c] += ar * coupling * A[c]
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
 def _add_point_mass(
     mass: float, rows: int, U: F64, bx: float, by: float, M: F64, h: F64
 ) -> None:  # pragma: no cover - compiled
@@ -167,31 +184,15 @@ def assemble_local(q: F64, dq: F64, arrays: ArmArrays, ws: Workspace) -> None:  
                     ar = jtip * A[r]
                     for c in range(r + 1):
                         M[r, c] += ar * A[c]
-            if has_joints:
-                m = nq + i
-                jm = jt[i, layout.J_INERTIA]
-                M[m, m] += jm
-                cr = jt[i, layout.J_COUPLED]  # 1 / N: rotor rate (carrier rate / N + dq_m)
-                if cr != 0.0:
-                    for r in range(s):
-                        ar = jm * cr * A[r]
-                        M[m, r] += ar
-                        for c in range(r + 1):
-                            M[r, c] += ar * cr * A[c]
+            if has_joints:  # the motor: rate carrier rate / N + dq_m
+                _add_rotor(jt[i, layout.J_INERTIA], jt[i, layout.J_COUPLED], nq + i, s, A, M)
             # hub mass at the joint, carried by the previous link's tip
             mh = lk[i, HUB_MASS]
             if mh != 0.0:
                 _add_point_mass(mh, s, U, bx, by, M, h)
         jr = lk[i, ROTOR_INERTIA]  # a rigid joint's rotor: rate carrier rate / N + dtheta_i
         if jr != 0.0:
-            M[s, s] += jr
-            cr = lk[i, ROTOR_COUPLING]
-            if cr != 0.0:
-                for r in range(s):
-                    ar = jr * cr * A[r]
-                    M[s, r] += ar
-                    for c in range(r + 1):
-                        M[r, c] += ar * cr * A[c]
+            _add_rotor(jr, lk[i, ROTOR_COUPLING], s, s, A, M)
         ad += dq[i]
         A[s] = 1.0
         U[0, s] = 0.0
