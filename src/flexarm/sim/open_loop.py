@@ -196,8 +196,9 @@ def _half_substep_times(t: F64, substeps: int) -> F64:
     """The start, middle and end of every RK4 substep over the grid ``t`` (s): the
     times, shape ``(2 (K - 1) substeps + 1,)``, at which a function of time is
     evaluated beforehand."""
-    h = (t[1] - t[0]) / substeps
-    return t[0] + 0.5 * h * np.arange(2 * (t.shape[0] - 1) * substeps + 1)
+    h = float(t[1] - t[0]) / substeps
+    times: F64 = t[0] + 0.5 * h * np.arange(2 * (t.shape[0] - 1) * substeps + 1)
+    return times
 
 
 def _deflection_limits(arm: Plant, max_deflection: float | None, owner: str) -> F64:
