@@ -8,10 +8,15 @@ grid points:
 
 Parameter vector (float64)
     The header (:data:`HEAD` slots, named by the slot constants): ``nx, ny, G``,
-    the point-sensor flag, the feedback gain, ``ks``, ``lambda0`` and the offset of
-    the fuzzy part. Then the grid (``G`` elbow angles, rad, increasing). Then one
-    block per grid point: ``Phi`` (nx, nx), ``Gamma`` (nx, nu), ``C`` (ny, nx),
-    ``K`` (nu, nx), ``M`` (nx, ny), each row-major (:func:`block_parts`). Then,
+    the point-sensor flag, the feedback gain, ``ks``, ``lambda0``, the offset of
+    the fuzzy part, ``G1`` and the absolute-frame flag. Then the grid (``G`` elbow
+    angles, rad, increasing), then ``G1`` shoulder angles (rad, increasing; one,
+    0, for the design at ``theta_1 = 0`` turned with the reference). Then one
+    block per grid point, shoulder-major (block ``i G + j`` at shoulder angle
+    ``i`` and elbow angle ``j``): ``Phi`` (nx, nx), ``Gamma`` (nx, nu), ``C``
+    (ny, nx), ``K`` (nu, nx), ``M`` (nx, ny), each row-major, then the operating
+    torques ``tau0`` (nu; N m) and the output at the operating point less the
+    reference's (ny; the sag of a sensed point, m) (:func:`block_parts`). Then,
     with fuzzy adaptation only, the fuzzy part: each link's tip deflection as a row
     over the ``nx / 2`` coordinates (nu, nx / 2), then the packed fuzzy system
     (:func:`flexarm.fuzzy.compiled.pack_system`).
@@ -32,6 +37,7 @@ import numpy as np
 from .._types import F64
 
 __all__ = [
+    "ABSOLUTE",
     "FUZZY",
     "GAIN",
     "HEAD",
@@ -40,6 +46,7 @@ __all__ = [
     "NX",
     "NY",
     "N_GRID",
+    "N_GRID1",
     "POINT",
     "LQGLayout",
     "block_parts",
@@ -49,21 +56,26 @@ __all__ = [
 ]
 
 
-NX, NY, N_GRID, POINT, GAIN, KS, LAMBDA0, FUZZY = range(8)
+NX, NY, N_GRID, POINT, GAIN, KS, LAMBDA0, FUZZY, N_GRID1, ABSOLUTE = range(10)
 """The header's slots: sizes, the point-sensor flag (1.0 or 0.0), the feedback gain,
-``ks``, ``lambda0`` and the offset of the fuzzy part."""
-HEAD = 8
+``ks``, ``lambda0``, the offset of the fuzzy part, the shoulder grid's size and the
+absolute-frame flag (1.0: the design is at the grid's shoulder angles, the
+measurement is not turned)."""
+HEAD = 10
 """The header's length."""
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def block_parts(nx: int, nu: int, ny: int) -> tuple[int, int, int, int, int, int]:
-    """Offsets of ``Phi, Gamma, C, K, M`` inside a grid point's block, and its length."""
+def block_parts(nx: int, nu: int, ny: int) -> tuple[int, int, int, int, int, int, int, int]:
+    """Offsets of ``Phi, Gamma, C, K, M, tau0, y0`` inside a grid point's block, and
+    its length."""
     gamma = nx * nx
     c = gamma + nx * nu
     k = c + ny * nx
     m = k + nu * nx
-    return 0, gamma, c, k, m, m + nx * ny
+    tau0 = m + nx * ny
+    y0 = tau0 + nu
+    return 0, gamma, c, k, m, tau0, y0, y0 + ny
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -78,20 +90,35 @@ def state_parts(nx: int, nu: int, ny: int) -> tuple[int, int, int, int, int, int
     return du, prediction, innovation, fuzzy_inputs, gain, gain + 1
 
 
-def pack_block(phi: F64, gamma: F64, c: F64, k: F64, m: F64) -> F64:
-    """One grid point's block, its matrices in layout order."""
-    return np.concatenate([a.ravel() for a in (phi, gamma, c, k, m)])
+def pack_block(
+    phi: F64, gamma: F64, c: F64, k: F64, m: F64, tau0: F64 | None = None, y0: F64 | None = None
+) -> F64:
+    """One grid point's block, its matrices in layout order (``tau0``, ``y0``: zeros
+    if not given)."""
+    t0 = np.zeros(gamma.shape[1]) if tau0 is None else tau0
+    o0 = np.zeros(c.shape[0]) if y0 is None else y0
+    return np.concatenate([a.ravel() for a in (phi, gamma, c, k, m, t0, o0)])
 
 
 def pack_parameters(
-    head: Sequence[float], grid: F64, blocks: Sequence[F64], fuzzy: Sequence[F64]
+    head: Sequence[float],
+    grid: F64,
+    blocks: Sequence[F64],
+    fuzzy: Sequence[F64],
+    shoulder: F64 | None = None,
 ) -> F64:
     """The parameter vector from the header's values before the fuzzy offset
-    (``nx, ny, G, point, gain, ks, lambda0``), the grid, the blocks and the fuzzy
-    part's pieces (empty without adaptation); the fuzzy offset is filled in."""
-    header = np.array([*head, 0.0])
-    header[FUZZY] = HEAD + grid.shape[0] + sum(b.shape[0] for b in blocks)
-    return np.concatenate([header, grid, *blocks, *fuzzy])
+    (``nx, ny, G, point, gain, ks, lambda0``), the elbow grid, the blocks, the fuzzy
+    part's pieces (empty without adaptation) and the shoulder grid (None: one point,
+    0, and the measurement turned with the reference; else absolute); the fuzzy
+    offset, ``G1`` and the frame flag are filled in."""
+    g1 = np.zeros(1) if shoulder is None else np.asarray(shoulder, dtype=float)
+    header = np.zeros(HEAD)
+    header[:FUZZY] = head
+    header[N_GRID1] = g1.shape[0]
+    header[ABSOLUTE] = 0.0 if shoulder is None else 1.0
+    header[FUZZY] = HEAD + grid.shape[0] + g1.shape[0] + sum(b.shape[0] for b in blocks)
+    return np.concatenate([header, grid, g1, *blocks, *fuzzy])
 
 
 class LQGLayout(NamedTuple):
@@ -101,20 +128,43 @@ class LQGLayout(NamedTuple):
     nu: int
     ny: int
     n_grid: int
+    n_shoulder: int = 1
 
     @classmethod
     def of(cls, params: F64, nu: int) -> LQGLayout:
         """The layout of ``params`` for an arm with ``nu`` links."""
-        return cls(int(params[NX]), nu, int(params[NY]), int(params[N_GRID]))
+        sizes = (int(params[NX]), nu, int(params[NY]), int(params[N_GRID]))
+        return cls(*sizes, int(params[N_GRID1]))
 
     def grid(self, params: F64) -> F64:
         """The schedule's elbow angles, shape (G,), rad."""
         return params[HEAD : HEAD + self.n_grid]
 
-    def matrices(self, params: F64, j: int) -> tuple[F64, F64, F64, F64, F64]:
-        """``Phi, Gamma, C, K, M`` of grid point ``j`` (views of ``params``)."""
+    def shoulder_grid(self, params: F64) -> F64:
+        """The schedule's shoulder angles, shape (G1,), rad."""
+        start = HEAD + self.n_grid
+        return params[start : start + self.n_shoulder]
+
+    def _start(self, j: int) -> int:
+        return (
+            HEAD
+            + self.n_grid
+            + self.n_shoulder
+            + j * block_parts.py_func(self.nx, self.nu, self.ny)[7]
+        )
+
+    def offsets(self, params: F64, j: int) -> tuple[F64, F64]:
+        """``tau0`` (nu; N m) and ``y0`` (ny) of block ``j`` (views of ``params``)."""
         parts = block_parts.py_func(self.nx, self.nu, self.ny)
-        start = HEAD + self.n_grid + j * parts[5]
+        start = self._start(j)
+        tau0 = params[start + parts[5] : start + parts[5] + self.nu]
+        return tau0, params[start + parts[6] : start + parts[6] + self.ny]
+
+    def matrices(self, params: F64, j: int) -> tuple[F64, F64, F64, F64, F64]:
+        """``Phi, Gamma, C, K, M`` of block ``j`` (views of ``params``; grid point ``j``
+        of a schedule on the elbow angle alone)."""
+        parts = block_parts.py_func(self.nx, self.nu, self.ny)
+        start = self._start(j)
         shapes = [
             (self.nx, self.nx),
             (self.nx, self.nu),
