@@ -14,9 +14,12 @@ Parameter vector (float64)
     0, for the design at ``theta_1 = 0`` turned with the reference). Then one
     block per grid point, shoulder-major (block ``i G + j`` at shoulder angle
     ``i`` and elbow angle ``j``): ``Phi`` (nx, nx), ``Gamma`` (nx, nu), ``C``
-    (ny, nx), ``K`` (nu, nx), ``M`` (nx, ny), each row-major, then the operating
-    torques ``tau0`` (nu; N m) and the output at the operating point less the
-    reference's (ny; the sag of a sensed point, m) (:func:`block_parts`). Then,
+    (ny, nx), ``K`` (nu, nx), ``M`` (nx, ny), each row-major (:func:`block_parts`).
+    Then, for a design about the gravity equilibrium, the operating table: a finer
+    grid of elbow angles (``H``), of shoulder angles (``H1``), and per grid point,
+    shoulder-major, the holding torques ``tau0`` (nu; N m) and the measurement there
+    less what the law subtracts from the reference ``y0`` (ny; the sensed point's
+    sag, m) (:func:`operating_parts`; none without gravity). Then,
     with fuzzy adaptation only, the fuzzy part: each link's tip deflection as a row
     over the ``nx / 2`` coordinates (nu, nx / 2), then the packed fuzzy system
     (:func:`flexarm.fuzzy.compiled.pack_system`).
@@ -47,35 +50,44 @@ __all__ = [
     "NY",
     "N_GRID",
     "N_GRID1",
+    "OPS",
+    "OPS_N",
+    "OPS_N1",
     "POINT",
     "LQGLayout",
     "block_parts",
+    "operating_parts",
     "pack_block",
     "pack_parameters",
     "state_parts",
 ]
 
 
-NX, NY, N_GRID, POINT, GAIN, KS, LAMBDA0, FUZZY, N_GRID1, ABSOLUTE = range(10)
+NX, NY, N_GRID, POINT, GAIN, KS, LAMBDA0, FUZZY, N_GRID1, ABSOLUTE, OPS, OPS_N, OPS_N1 = range(13)
 """The header's slots: sizes, the point-sensor flag (1.0 or 0.0), the feedback gain,
-``ks``, ``lambda0``, the offset of the fuzzy part, the shoulder grid's size and the
+``ks``, ``lambda0``, the offset of the fuzzy part, the shoulder grid's size, the
 absolute-frame flag (1.0: the design is at the grid's shoulder angles, the
-measurement is not turned)."""
-HEAD = 10
+measurement is not turned), and the operating table's offset (0: none) and its
+grids' sizes ``H``, ``H1``."""
+HEAD = 13
 """The header's length."""
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def block_parts(nx: int, nu: int, ny: int) -> tuple[int, int, int, int, int, int, int, int]:
-    """Offsets of ``Phi, Gamma, C, K, M, tau0, y0`` inside a grid point's block, and
-    its length."""
+def block_parts(nx: int, nu: int, ny: int) -> tuple[int, int, int, int, int, int]:
+    """Offsets of ``Phi, Gamma, C, K, M`` inside a grid point's block, and its length."""
     gamma = nx * nx
     c = gamma + nx * nu
     k = c + ny * nx
     m = k + nu * nx
-    tau0 = m + nx * ny
-    y0 = tau0 + nu
-    return 0, gamma, c, k, m, tau0, y0, y0 + ny
+    return 0, gamma, c, k, m, m + nx * ny
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def operating_parts(start: int, nu: int, ny: int, h: int, h1: int) -> tuple[int, int, int]:
+    """Offsets of the operating table's elbow grid, shoulder grid and first row
+    (``start``: the table's offset; rows of ``nu + ny``: ``tau0`` then ``y0``)."""
+    return start, start + h, start + h + h1
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -90,14 +102,9 @@ def state_parts(nx: int, nu: int, ny: int) -> tuple[int, int, int, int, int, int
     return du, prediction, innovation, fuzzy_inputs, gain, gain + 1
 
 
-def pack_block(
-    phi: F64, gamma: F64, c: F64, k: F64, m: F64, tau0: F64 | None = None, y0: F64 | None = None
-) -> F64:
-    """One grid point's block, its matrices in layout order (``tau0``, ``y0``: zeros
-    if not given)."""
-    t0 = np.zeros(gamma.shape[1]) if tau0 is None else tau0
-    o0 = np.zeros(c.shape[0]) if y0 is None else y0
-    return np.concatenate([a.ravel() for a in (phi, gamma, c, k, m, t0, o0)])
+def pack_block(phi: F64, gamma: F64, c: F64, k: F64, m: F64) -> F64:
+    """One grid point's block, its matrices in layout order."""
+    return np.concatenate([a.ravel() for a in (phi, gamma, c, k, m)])
 
 
 def pack_parameters(
@@ -106,19 +113,28 @@ def pack_parameters(
     blocks: Sequence[F64],
     fuzzy: Sequence[F64],
     shoulder: F64 | None = None,
+    operating: tuple[F64, F64, F64] | None = None,
 ) -> F64:
     """The parameter vector from the header's values before the fuzzy offset
     (``nx, ny, G, point, gain, ks, lambda0``), the elbow grid, the blocks, the fuzzy
-    part's pieces (empty without adaptation) and the shoulder grid (None: one point,
-    0, and the measurement turned with the reference; else absolute); the fuzzy
-    offset, ``G1`` and the frame flag are filled in."""
+    part's pieces (empty without adaptation), the shoulder grid (None: one point,
+    0, and the measurement turned with the reference; else absolute) and the
+    operating table (its elbow grid, shoulder grid and rows (H1 H, nu + ny), or
+    None); the offsets, sizes and the frame flag are filled in."""
     g1 = np.zeros(1) if shoulder is None else np.asarray(shoulder, dtype=float)
     header = np.zeros(HEAD)
     header[:FUZZY] = head
     header[N_GRID1] = g1.shape[0]
     header[ABSOLUTE] = 0.0 if shoulder is None else 1.0
-    header[FUZZY] = HEAD + grid.shape[0] + g1.shape[0] + sum(b.shape[0] for b in blocks)
-    return np.concatenate([header, grid, g1, *blocks, *fuzzy])
+    end = HEAD + grid.shape[0] + g1.shape[0] + sum(b.shape[0] for b in blocks)
+    table: list[F64] = []
+    if operating is not None:
+        h, h1, rows = (np.asarray(x, dtype=float) for x in operating)
+        header[OPS], header[OPS_N], header[OPS_N1] = end, h.shape[0], h1.shape[0]
+        table = [h, h1, rows.ravel()]
+        end += h.shape[0] + h1.shape[0] + rows.size
+    header[FUZZY] = end
+    return np.concatenate([header, grid, g1, *blocks, *table, *fuzzy])
 
 
 class LQGLayout(NamedTuple):

@@ -77,15 +77,20 @@ from ._lqg_layout import (
     N_GRID1,
     NX,
     NY,
+    OPS,
+    OPS_N,
+    OPS_N1,
     POINT,
     LQGLayout,
     block_parts,
+    operating_parts,
     pack_block,
     pack_parameters,
     state_parts,
 )
 from .controllers import Controller, gaussian_smoothing, ringing_frequency, wrap_control_function
 from .design import kalman, lqr
+from .gravity_compensation import holding_torques, scratch_size
 from .linearize import linearize, measure
 from .signals import (
     r_angles,
@@ -139,7 +144,7 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
     ng1, absolute = int(p[N_GRID1]), p[ABSOLUTE] != 0.0
     point = p[POINT] != 0.0
     gain, ks, lam0, fo = p[GAIN], p[KS], p[LAMBDA0], int(p[FUZZY])
-    f_phi, f_gam, f_c, f_k, f_m, f_t0, f_y0, blk = block_parts(nx, nu, ny)
+    f_phi, f_gam, f_c, f_k, f_m, blk = block_parts(nx, nu, ny)
     base = HEAD + ng + ng1
     # --- the schedule: interpolate between the grid points around (theta_1,) theta_2
     ra = r_angles(nu)
@@ -149,6 +154,18 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
     j1, i1 = min(j + 1, ng - 1), min(i + 1, ng1 - 1)
     o00, o01 = base + (i * ng + j) * blk, base + (i * ng + j1) * blk
     o10, o11 = base + (i1 * ng + j) * blk, base + (i1 * ng + j1) * blk
+    # the operating point: holding torques and output offset, from the finer table
+    ops, width = int(p[OPS]), nu + ny
+    q00 = q01 = q10 = q11 = 0
+    uo = wo = 0.0
+    if ops > 0:
+        h, h1 = int(p[OPS_N]), int(p[OPS_N1])
+        g2o, g1o, rows = operating_parts(ops, nu, ny, h, h1)
+        jo, wo = _cell(p[g2o : g2o + h], th2)
+        io, uo = _cell(p[g1o : g1o + h1], th1)
+        jo1, io1 = min(jo + 1, h - 1), min(io + 1, h1 - 1)
+        q00, q01 = rows + (io * h + jo) * width, rows + (io * h + jo1) * width
+        q10, q11 = rows + (io1 * h + jo) * width, rows + (io1 * h + jo1) * width
     s_du, s_xp, s_innov, s_fuzzy, s_gain, s_work = state_parts(nx, nu, ny)
     xh = s[0:s_du]
     du = s[s_du : s_du + nu]
@@ -184,7 +201,7 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
             innov[i] = y[ya + i] - r[ra + i]
             innov[nu + i] = y[yr + i] - r[rr + i]
     for a in range(ny):  # less the output's offset at the operating point, and C xp
-        acc = _lerp(p, o00 + f_y0, o01 + f_y0, o10 + f_y0, o11 + f_y0, u, w, a)
+        acc = _lerp(p, q00, q01, q10, q11, uo, wo, nu + a) if ops > 0 else 0.0
         for b in range(nx):
             acc += _lerp(p, o00 + f_c, o01 + f_c, o10 + f_c, o11 + f_c, u, w, a * nx + b) * xp[b]
         innov[a] -= acc
@@ -210,7 +227,9 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
         for b in range(nx):
             acc -= _lerp(p, o00 + f_k, o01 + f_k, o10 + f_k, o11 + f_k, u, w, a * nx + b) * xh[b]
         du[a] = gain * acc
-        tau[a] = gain * acc + _lerp(p, o00 + f_t0, o01 + f_t0, o10 + f_t0, o11 + f_t0, u, w, a)
+        tau[a] = gain * acc
+        if ops > 0:  # the holding torques of the reference posture
+            tau[a] += _lerp(p, q00, q01, q10, q11, uo, wo, a)
 
 
 lqg_cfunc = wrap_control_function(lqg_law, cache=True)
@@ -435,7 +454,15 @@ class LQG(Controller):
                 tips[i, ms[i] : ms[i + 1]] = model.arrays.tip_deflection[ms[i] : ms[i + 1]]
             fuzzy = [tips.ravel(), pack_system(fls.compiled())]
         head = (nx, ny, grid.shape[0], 1.0 if point else 0.0, self.gain, self.ks, lam0)
-        return pack_parameters(head, grid, blocks, fuzzy, shoulder)
+        operating = None
+        if shoulder is not None:  # the weight held by the law, on a finer grid
+            fine = [
+                np.linspace(g[0], g[-1], _TABLE_REFINEMENT * (g.shape[0] - 1) + 1)
+                for g in (grid, shoulder)
+            ]
+            rows = _operating_table(model, geometry, tuple(fine[0]), tuple(fine[1]))
+            operating = (fine[0], fine[1], rows)
+        return pack_parameters(head, grid, blocks, fuzzy, shoulder, operating)
 
     def _grid(self, angles: F64) -> F64:
         """``schedule_points`` evenly spaced over ``angles``' range and 0.05 rad beyond."""
@@ -475,7 +502,7 @@ def _design_blocks(
     noises: tuple[float, float, float],
     shoulder: tuple[float, ...] | None = None,
 ) -> tuple[list[F64], int]:
-    """Per grid point ``Phi, Gamma, C, K, M, tau0, y0`` flattened, and the
+    """Per grid point ``Phi, Gamma, C, K, M`` flattened, and the
     measurement's size (cached: runs that share a design solve its Riccati equations
     once). ``shoulder`` None: at ``theta_1 = 0``; else on the grid of both angles,
     shoulder-major, about the gravity equilibrium of each posture."""
@@ -499,34 +526,53 @@ def _design_blocks(
         reg = lqr(meas, q, rt * np.eye(n_links))
         rn = np.diag([pos_noise**2] * half + [vel_noise**2] * half)
         est = kalman(meas, meas.B, tn**2 * np.eye(n_links), rn)
-        tau0, y0 = _operating_point(model, sensor, theta, ny)
-        blocks.append(pack_block(meas.A, meas.B, meas.C, reg.K, est.M, tau0, y0))
+        blocks.append(pack_block(meas.A, meas.B, meas.C, reg.K, est.M))
     for b in blocks:
         b.flags.writeable = False
     return blocks, ny
 
 
-def _operating_point(
-    model: FlexibleArm, sensor: Sensor, theta: F64, ny: int
-) -> tuple[F64 | None, F64 | None]:
-    """With gravity, the holding torques of the posture ``theta`` (N m) and the
-    measurement there less what the law subtracts from the reference (the sensed
-    point's sag, m; the encoders' offset from the joint angles, rad; rates zero):
-    :meth:`FlexibleArm.equilibrium`. None and None without gravity."""
-    if model.gravity is None:
-        return None, None
-    eq = model.equilibrium(theta)
-    y = measure(model, sensor, eq.q, np.zeros(model.n_dof))
-    n_links = model.n_links
-    y0 = np.zeros(ny)
+_TABLE_REFINEMENT = 4
+"""The operating table's grid is this many times finer than the design's (the
+holding torques vary by some 100 N m over the square: interpolated on the design's
+grid they would be off by about a newton metre, a standing error of the loop)."""
+
+
+@functools.lru_cache(maxsize=16)
+def _operating_table(
+    model: FlexibleArm, geometry: _Geometry, elbow: tuple[float, ...], shoulder: tuple[float, ...]
+) -> F64:
+    """Rows (len(shoulder), len(elbow), nu + ny), shoulder-major: at each posture the
+    holding torques (N m; the compiled statics of
+    :mod:`flexarm.control.gravity_compensation`, the sag of
+    :meth:`FlexibleArm.equilibrium`) and the measurement at rest there less what the
+    law subtracts from the reference (the sensed point's sag, m; rates zero; the
+    encoders' offset, rad, for the joint sensor)."""
+    sensor = _sensor_of(geometry)
+    nu, n = model.n_links, model.n_dof
     link, distance, _ = sensor.resolve(model)
+    ny = 4 if link >= 0 else 2 * nu
+    postures = np.array([(t1, t2) for t1 in shoulder for t2 in elbow], dtype=float)
+    q = np.zeros((postures.shape[0], n))
+    tau = np.zeros((postures.shape[0], nu))
+    scratch = np.zeros(scratch_size(n, nu))
+    for k, theta in enumerate(postures):
+        holding_torques(theta, model.arrays, scratch, tau[k])
+        q[k] = scratch[:n]
+    if model.has_flexible_joints:  # the motors ahead of their links by the springs' deflection
+        for k, theta in enumerate(postures):
+            q[k] = model.equilibrium(theta).q
+    y = measure(model, sensor, q, np.zeros_like(q))
+    y0 = np.zeros((postures.shape[0], ny))
     if link >= 0:
         levers = lever_lengths(model.link_lengths, link, distance)
-        rp = y_point(n_links)
-        y0[:2] = y[rp : rp + 2] - rigid_point(levers, theta)[0]
+        rp = y_point(nu)
+        y0[:, :2] = y[:, rp : rp + 2] - rigid_point(levers, postures)[0]
     else:
-        y0[:n_links] = y[y_angles(n_links) : y_angles(n_links) + n_links] - theta
-    return np.asarray(eq.torques, dtype=float), y0
+        y0[:, :nu] = y[:, y_angles(nu) : y_angles(nu) + nu] - postures
+    rows = np.concatenate([tau, y0], axis=1).reshape(len(shoulder), len(elbow), nu + ny)
+    rows.flags.writeable = False
+    return rows
 
 
 def closed_loop_growth(

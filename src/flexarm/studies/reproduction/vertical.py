@@ -171,7 +171,7 @@ class Vertical:
     def diagnosis(self) -> str:
         """Why the vertical PD's error is what it is, in one sentence with its numbers."""
         pd, raw = self.run("pd", "joint"), self.run(*DIAGNOSTIC)
-        corrected, flat = self.run("pd sag-corrected", "joint"), self.run("pd", "joint", "h")
+        corrected = self.run("pd sag-corrected", "joint")
         flat = self.run("pd", "joint", "horizontal")
 
         def rms(r: VerticalRun | None) -> str:
