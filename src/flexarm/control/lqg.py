@@ -158,6 +158,7 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
     ops, width = int(p[OPS]), nu + ny
     q00 = q01 = q10 = q11 = 0
     uo = wo = 0.0
+    d2 = d1 = 0.0  # the reference's rates over the table's spacings (1/s)
     if ops > 0:
         h, h1 = int(p[OPS_N]), int(p[OPS_N1])
         g2o, g1o, rows = operating_parts(ops, nu, ny, h, h1)
@@ -166,6 +167,10 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
         jo1, io1 = min(jo + 1, h - 1), min(io + 1, h1 - 1)
         q00, q01 = rows + (io * h + jo) * width, rows + (io * h + jo1) * width
         q10, q11 = rows + (io1 * h + jo) * width, rows + (io1 * h + jo1) * width
+        if jo1 > jo:
+            d2 = r[r_rates(nu) + 1] / (p[g2o + jo1] - p[g2o + jo])
+        if io1 > io:
+            d1 = r[r_rates(nu)] / (p[g1o + io1] - p[g1o + io])
     s_du, s_xp, s_innov, s_fuzzy, s_gain, s_work = state_parts(nx, nu, ny)
     xh = s[0:s_du]
     du = s[s_du : s_du + nu]
@@ -200,8 +205,16 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
         for i in range(nu):
             innov[i] = y[ya + i] - r[ra + i]
             innov[nu + i] = y[yr + i] - r[rr + i]
+    half = ny // 2
     for a in range(ny):  # less the output's offset at the operating point, and C xp
-        acc = _lerp(p, q00, q01, q10, q11, uo, wo, nu + a) if ops > 0 else 0.0
+        acc = 0.0
+        if ops > 0 and a < half:  # the offset (the sag) ...
+            acc = _lerp(p, q00, q01, q10, q11, uo, wo, nu + a)
+        elif ops > 0:  # ... and its rate along the reference: d y0/d theta . dtheta_ref
+            k = nu + a - half
+            f00, f01, f10, f11 = p[q00 + k], p[q01 + k], p[q10 + k], p[q11 + k]
+            acc = d2 * ((1.0 - uo) * (f01 - f00) + uo * (f11 - f10))
+            acc += d1 * ((1.0 - wo) * (f10 - f00) + wo * (f11 - f01))
         for b in range(nx):
             acc += _lerp(p, o00 + f_c, o01 + f_c, o10 + f_c, o11 + f_c, u, w, a * nx + b) * xp[b]
         innov[a] -= acc

@@ -37,9 +37,39 @@ from ..model.kinematics import rigid_jacobian, rigid_point
 from .gravity_compensation import holding_torques, scratch_size
 from .trajectories import ELBOWS, Trajectory, check_trajectory, evaluation_times
 
-__all__ = ["SagCorrectedPath", "sag_corrected_angles"]
+__all__ = ["SagCorrectedPath", "rest_tips", "sag_corrected_angles"]
 
 _OWNER = "sag_corrected_angles"
+
+
+def rest_tips(arm: FlexibleArm, theta: ArrayLike) -> tuple[F64, F64]:
+    """Where the tip of ``arm`` held at rest at joint angles ``theta`` stands, and the
+    torques that hold it there: the static sag by the compiled fixed point of
+    :mod:`flexarm.control.gravity_compensation` (that of
+    :meth:`FlexibleArm.equilibrium`; rigid joints), warm-started from posture to
+    posture.
+
+    Parameters
+    ----------
+    arm : FlexibleArm
+    theta : array_like, shape (m, n_links)
+        Joint angles, rad.
+
+    Returns
+    -------
+    tips : ndarray, shape (m, 2)
+        m.
+    torques : ndarray, shape (m, n_links)
+        N m.
+    """
+    angles = check_array(theta, "theta", "rest_tips", shape=(-1, arm.n_links))
+    n = arm.n_dof
+    scratch = np.zeros(scratch_size(n, arm.n_links))
+    tips, torques = np.zeros((angles.shape[0], 2)), np.zeros((angles.shape[0], arm.n_links))
+    for k, th in enumerate(angles):
+        holding_torques(np.ascontiguousarray(th), arm.arrays, scratch, torques[k])
+        tips[k] = np.asarray(arm.tip_position(scratch[:n]), dtype=float)
+    return tips, torques
 
 
 def sag_corrected_angles(
@@ -99,13 +129,9 @@ def sag_corrected_angles(
     if arm.gravity is None:
         return theta[0] if single else theta
     lengths = np.asarray(arm.link_lengths, dtype=float)
-    # the static sag by the compiled fixed point of the gravity compensation (the sag
-    # of arm.equilibrium, warm-started from the previous point's)
-    scratch, tau = np.zeros(scratch_size(arm.n_dof, 2)), np.zeros(2)
     for k in range(theta.shape[0]):
         for _ in range(max_iter):
-            holding_torques(theta[k], arm.arrays, scratch, tau)
-            miss = pts[k] - np.asarray(arm.tip_position(scratch[: arm.n_dof]), dtype=float)
+            miss = pts[k] - rest_tips(arm, theta[k : k + 1])[0][0]
             if float(np.linalg.norm(miss)) <= tol:
                 break
             theta[k] += np.linalg.solve(rigid_jacobian(lengths, theta[k]), miss)

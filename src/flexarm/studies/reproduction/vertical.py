@@ -42,7 +42,7 @@ from ..._io import JSONValue
 from ...control.controllers import Controller, JacobianTransposePD
 from ...control.lqg import LQG
 from ...control.reflected import ReflectedTipPD
-from ...control.sag import SagCorrectedPath
+from ...control.sag import SagCorrectedPath, rest_tips
 from ...control.trajectories import Square, Trajectory
 from ...model.arm import FlexibleArm
 from ...sensing.sensors import JointSensor, Sensor, TipSensor
@@ -114,8 +114,7 @@ def static_sag(arm: FlexibleArm, path: Trajectory, n: int = 201) -> tuple[float,
     t = np.linspace(0.0, float(path.duration), n)
     points = np.asarray(path.evaluate(t)[0], dtype=float)
     theta = np.asarray(arm.inverse_kinematics(points), dtype=float)
-    tips = np.array([arm.equilibrium(th).tip for th in theta])
-    d = np.linalg.norm(tips - points, axis=1)
+    d = np.linalg.norm(rest_tips(arm, theta)[0] - points, axis=1)
     return float(np.sqrt(np.mean(d**2))), float(d.max())
 
 
@@ -376,10 +375,9 @@ def run_vertical(
     chosen = {sensor: choose_vertical(runs, sensor) for sensor in CANDIDATES}
     arm, square = _vertical_arm(), Square()
     sag_rms, sag_max = static_sag(arm, square)
-    corners = [arm.inverse_kinematics(np.asarray(c, dtype=float)) for c in square.corners]
-    t = np.linspace(0.0, square.duration, 41)
+    t = np.union1d(np.linspace(0.0, square.duration, 201), square.corner_times)
     theta = arm.inverse_kinematics(np.asarray(square.evaluate(t)[0]))
-    holding = max(float(np.max(np.abs(arm.equilibrium(th).torques))) for th in [*theta, *corners])
+    holding = float(np.max(np.abs(rest_tips(arm, theta)[1])))
     return Vertical(runs, chosen, sag_rms, sag_max, holding, tip_weights)
 
 
