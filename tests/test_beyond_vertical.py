@@ -15,9 +15,13 @@ from flexarm.sensing.sensors import JointSensor, TipSensor
 from flexarm.studies.reproduction.beyond import Beyond
 from flexarm.studies.reproduction.vertical import (
     CANDIDATES,
+    DIAGNOSTIC,
     GRAVITY,
+    HORIZONTAL,
     Vertical,
     VerticalRun,
+    _jobs,
+    _result,
     choose_vertical,
 )
 from helpers.reproduction import row_result
@@ -69,7 +73,8 @@ def test_the_vertical_rows_appear_in_the_summary_text_and_html_with_the_gravity(
     assert "lqg, joint, vertical: diverged at 3 s" in text
     # the diagnosis states the numbers it rests on
     assert "600 mm" in v.diagnosis() and "630 mm RMS" in v.diagnosis() and "115 N m" in text
-    b = Beyond({"tip": "default"}, [row_result("lqg default", "tip", "nominal", 0.02)], 0.8)
+    rows = [row_result(name, "tip", "nominal", 0.02) for name in ("lqg default", "lqg fuzzy ks 1")]
+    b = Beyond({"tip": "default"}, rows, 0.8)
     b.vertical = v
     html = b.html()
     assert "vertical plane (gravity (0.0, -9.81)" in html and "pd sag-corrected (chosen)" in html
@@ -94,7 +99,7 @@ def test_the_commanded_path_adds_the_interpolated_correction_and_its_slope():
     p0, v0, _ = Square().evaluate(knots)
     rigid = fa.FlexibleArm.paper().forward_kinematics(path.angles)
     np.testing.assert_allclose(p, rigid, atol=1e-12)  # on the knots: theta*'s rigid point
-    t = np.array([1.01, 7.3, 12.62])  # between knots: the velocity is the position's slope
+    t = np.array([1.01, 7.33, 12.62])  # between knots: the velocity is the position's slope
     h = 1e-6
     slope = (path.evaluate(t + h)[0] - path.evaluate(t - h)[0]) / (2 * h)
     np.testing.assert_allclose(path.evaluate(t)[1], slope, atol=1e-6)
@@ -126,3 +131,25 @@ def test_the_compensated_pd_holds_the_joints_and_the_tip_sags_by_the_statics():
     r = fa.simulate(ARM, JacobianTransposePD.from_arm(ARM), hold, initial_state=x0)
     np.testing.assert_allclose(r.tip[-1], eq.tip, atol=1e-6)  # off the point by the sag
     assert np.linalg.norm(r.tip[-1] - p) > 0.3
+
+
+def test_the_jobs_are_the_candidates_the_diagnostic_and_the_horizontal_runs():
+    jobs = _jobs(0.004, 2e-4, 0.1, {}, 0.7)
+    made = sorted((law, sensor, plane) for law, sensor, plane, _ in jobs)
+    want = {(n, s, "vertical") for s, names in CANDIDATES.items() for n in names}
+    want |= {(*DIAGNOSTIC, "vertical")} | {(*h, "horizontal") for h in HORIZONTAL}
+    assert made == sorted(want)
+    for _, _, plane, args in jobs:
+        arm = args["arm"]
+        assert (arm.gravity is not None) == (plane == "vertical")  # type: ignore[attr-defined]
+        if plane == "vertical":  # at rest carrying its weight on the commanded first posture
+            theta = np.asarray(args["initial_state"][:2])  # type: ignore[index]
+            eq = ARM.equilibrium(theta)
+            np.testing.assert_allclose(args["initial_state"][: ARM.n_dof], eq.q)  # type: ignore[index]
+    # a run's figures are the deflected tip's against the square itself
+    job = next(j for j in jobs if j[:3] == ("pd", "joint", "vertical"))
+    result = fa.simulate(**job[3])  # type: ignore[arg-type]
+    row = _result(job, result)
+    error = np.linalg.norm(result.tip - Square().evaluate(result.t)[0], axis=1)
+    assert row.rms_error_m == pytest.approx(np.sqrt(np.mean(error**2)), rel=1e-12)
+    assert row.max_torque_Nm == pytest.approx(np.max(np.abs(result.tau)), rel=1e-12)
