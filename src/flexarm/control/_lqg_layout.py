@@ -162,19 +162,19 @@ class LQGLayout(NamedTuple):
         return params[start : start + self.n_shoulder]
 
     def _start(self, j: int) -> int:
-        return (
-            HEAD
-            + self.n_grid
-            + self.n_shoulder
-            + j * block_parts.py_func(self.nx, self.nu, self.ny)[7]
-        )
+        blk = block_parts.py_func(self.nx, self.nu, self.ny)[5]
+        return HEAD + self.n_grid + self.n_shoulder + j * blk
 
-    def offsets(self, params: F64, j: int) -> tuple[F64, F64]:
-        """``tau0`` (nu; N m) and ``y0`` (ny) of block ``j`` (views of ``params``)."""
-        parts = block_parts.py_func(self.nx, self.nu, self.ny)
-        start = self._start(j)
-        tau0 = params[start + parts[5] : start + parts[5] + self.nu]
-        return tau0, params[start + parts[6] : start + parts[6] + self.ny]
+    def operating(self, params: F64) -> tuple[F64, F64, F64] | None:
+        """The operating table: its elbow grid (H,), shoulder grid (H1,), rad, and rows
+        (H1, H, nu + ny): ``tau0`` (N m), then ``y0``; None without one."""
+        start = int(params[OPS])
+        if start == 0:
+            return None
+        h, h1 = int(params[OPS_N]), int(params[OPS_N1])
+        g, g1, r = operating_parts.py_func(start, self.nu, self.ny, h, h1)
+        rows = params[r : r + h * h1 * (self.nu + self.ny)].reshape(h1, h, self.nu + self.ny)
+        return params[g : g + h], params[g1 : g1 + h1], rows
 
     def matrices(self, params: F64, j: int) -> tuple[F64, F64, F64, F64, F64]:
         """``Phi, Gamma, C, K, M`` of block ``j`` (views of ``params``; grid point ``j``
