@@ -7,10 +7,12 @@ import numpy as np
 import pytest
 
 import flexarm as fa
+from flexarm.control._lqg_layout import LQGLayout
 from flexarm.control.controllers import JacobianTransposePD
 from flexarm.control.lqg import LQG
 from flexarm.control.sag import SagCorrectedPath, sag_corrected_angles
 from flexarm.control.trajectories import Line, Square
+from flexarm.model.kinematics import rigid_point
 from flexarm.sensing.sensors import JointSensor, TipSensor
 from flexarm.studies.reproduction.beyond import Beyond
 from flexarm.studies.reproduction.vertical import (
@@ -153,3 +155,21 @@ def test_the_jobs_are_the_candidates_the_diagnostic_and_the_horizontal_runs():
     error = np.linalg.norm(result.tip - Square().evaluate(result.t)[0], axis=1)
     assert row.rms_error_m == pytest.approx(np.sqrt(np.mean(error**2)), rel=1e-12)
     assert row.max_torque_Nm == pytest.approx(np.max(np.abs(result.tau)), rel=1e-12)
+
+
+def test_the_gravity_design_holds_the_statics_in_its_operating_table():
+    reference = np.zeros((2, 14))
+    reference[:, 6:8] = [[-0.5, 1.5], [-0.3, 1.7]]  # theta_1, theta_2
+    params = LQG(model=ARM, schedule_points=2).design(ARM, TipSensor(), 2e-4, reference)
+    layout = LQGLayout.of(params, 2)
+    np.testing.assert_allclose(layout.shoulder_grid(params), [-0.55, -0.25], rtol=1e-14)
+    elbow, shoulder, rows = layout.operating(params)  # type: ignore[misc]
+    assert rows.shape == (shoulder.shape[0], elbow.shape[0], 2 + 4)
+    lengths = np.asarray(ARM.link_lengths)
+    for i, j in [(0, 0), (2, 3), (4, 4)]:
+        theta = np.array([shoulder[i], elbow[j]])
+        eq = ARM.equilibrium(theta)  # Newton's statics
+        np.testing.assert_allclose(rows[i, j, :2], eq.torques, rtol=1e-9)
+        rigid = rigid_point(lengths, theta)[0]
+        np.testing.assert_allclose(rows[i, j, 2:4], eq.tip - rigid, atol=1e-9)
+        assert np.all(rows[i, j, 4:] == 0.0)  # at rest: no velocity offset
