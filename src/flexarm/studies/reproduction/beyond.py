@@ -426,9 +426,9 @@ def run_beyond(
         }
     if vertical:
         tip: dict[str, tuple[float | None, float | None, float | None]] = {}
-        for law, name in (("lqg", f"lqg {chosen['tip']}"), ("reflected", "reflected")):
+        for key, name in (("lqg", f"lqg {chosen['tip']}"), ("reflected", "reflected")):
             r = next(r for r in beyond.of(name, "tip") if r["row"] == nominal.name)
-            tip[law] = (r["rms_error_m"], r["max_error_m"], r["max_torque_Nm"])
+            tip[key] = (r["rms_error_m"], r["max_error_m"], r["max_torque_Nm"])
         beyond.vertical = run_vertical(
             duration,
             dt,
