@@ -9,7 +9,7 @@ import pytest
 import flexarm as fa
 from flexarm.control._lqg_layout import LQGLayout
 from flexarm.control.controllers import JacobianTransposePD
-from flexarm.control.lqg import LQG
+from flexarm.control.lqg import LQG, closed_loop_growth
 from flexarm.control.sag import SagCorrectedPath, sag_corrected_angles
 from flexarm.control.trajectories import Line, Square
 from flexarm.model.kinematics import rigid_point
@@ -144,10 +144,16 @@ def test_the_jobs_are_the_candidates_the_diagnostic_and_the_horizontal_runs():
     for _, _, plane, args in jobs:
         arm = args["arm"]
         assert (arm.gravity is not None) == (plane == "vertical")  # type: ignore[attr-defined]
-        if plane == "vertical":  # at rest carrying its weight on the commanded first posture
-            theta = np.asarray(args["initial_state"][:2])  # type: ignore[index]
-            eq = ARM.equilibrium(theta)
-            np.testing.assert_allclose(args["initial_state"][: ARM.n_dof], eq.q)  # type: ignore[index]
+        if plane == "vertical":  # at rest carrying its weight where the law holds it
+            x0 = np.asarray(args["initial_state"])
+            eq = ARM.equilibrium(x0[:2])
+            np.testing.assert_allclose(x0[: ARM.n_dof], eq.q)
+            assert np.all(x0[ARM.n_dof :] == 0.0)
+            p0 = Square().evaluate(0.0)[0]
+            if isinstance(args["trajectory"], SagCorrectedPath):  # its tip on the square
+                assert np.linalg.norm(eq.tip - p0) < 1e-8
+            else:  # the raw square's inverse kinematics
+                np.testing.assert_allclose(x0[:2], ARM.inverse_kinematics(p0), atol=1e-12)
     # a run's figures are the deflected tip's against the square itself
     job = next(j for j in jobs if j[:3] == ("pd", "joint", "vertical"))
     result = fa.simulate(**job[3])  # type: ignore[arg-type]
@@ -173,3 +179,8 @@ def test_the_gravity_design_holds_the_statics_in_its_operating_table():
         rigid = rigid_point(lengths, theta)[0]
         np.testing.assert_allclose(rows[i, j, 2:4], eq.tip - rigid, atol=1e-9)
         assert np.all(rows[i, j, 4:] == 0.0)  # at rest: no velocity offset
+
+
+def test_the_linear_growth_on_the_elbow_schedule_refuses_an_arm_with_gravity():
+    with pytest.raises(ValueError, match="'plant' parameter of closed_loop_growth"):
+        closed_loop_growth(ARM, LQG(), TipSensor(), 2e-4, [1.5])

@@ -604,6 +604,12 @@ def closed_loop_growth(
     boundary): this is the linear test of the robustness rows.
     """
     model = law._model(plant)
+    if model.gravity is not None or plant.gravity is not None:
+        raise InvalidValueError(
+            "The 'plant' parameter of closed_loop_growth must be an arm without gravity (the "
+            "linear loop about rest on the elbow schedule). Got an arm with gravity "
+            f"{(model.gravity if model.gravity is not None else plant.gravity)!r} instead."
+        )
     reference = np.zeros((len(theta2), 6 + 4 * model.n_links))
     reference[:, r_angles(model.n_links) + 1] = theta2
     params = law.design(model, sensor, dt, reference)

@@ -21,7 +21,8 @@ law at the horizontal study's reflection with the measured posture's
 compensation, its path corrected by ``1 - alpha`` of the sag. The Jacobian-
 transpose runs follow the raw square, as in the paper's matrix; the others the
 square smoothed as in the rest of this study. Every vertical run starts at
-rest carrying its weight on the commanded path's first posture. Errors are
+rest carrying its weight in the posture its law holds at the square's first
+point. Errors are
 those of the deflected tip against the square itself.
 
 Diagnosis: the PD without the compensation, and the static sag along the square
@@ -255,9 +256,14 @@ def _vertical_arm() -> FlexibleArm:
 
 
 def _at_rest(arm: FlexibleArm, path: Trajectory) -> tuple[float, ...]:
-    """The state at rest carrying its weight at the inverse kinematics of ``path``'s
-    first point, ``(q, dq)``."""
-    theta = arm.inverse_kinematics(np.asarray(path.evaluate(0.0)[0], dtype=float))
+    """The state ``(q, dq)`` at rest carrying its weight in the posture the law holds at
+    the path's first point: the sag-corrected angles of a corrected path (whatever its
+    fraction: every law here puts the tip of the arm at rest there on the square's
+    point), else the inverse kinematics of the path's first point."""
+    if isinstance(path, SagCorrectedPath):
+        theta = path.angles[0]
+    else:
+        theta = arm.inverse_kinematics(np.asarray(path.evaluate(0.0)[0], dtype=float))
     q = arm.equilibrium(theta).q
     return tuple(float(v) for v in np.concatenate([q, np.zeros_like(q)]))
 
