@@ -18,8 +18,8 @@ feedforward, beside the rigid inverse dynamics) on the sag-corrected path. The
 tip sensor: that LQG with the tip alone (the weights the horizontal study chose
 for it; the sag is its output's offset at each posture), and the reflected-tip
 law at the horizontal study's reflection with the measured posture's
-compensation, its path corrected by ``1 - alpha`` of the sag. The Jacobian-
-transpose runs follow the raw square, as in the paper's matrix; the others the
+compensation, its path corrected by ``1 - alpha`` of the sag. The
+Jacobian-transpose runs follow the raw square, as in the paper's matrix; the others the
 square smoothed as in the rest of this study. Every vertical run starts at
 rest carrying its weight in the posture its law holds at the square's first
 point. Errors are
@@ -34,6 +34,7 @@ whether the vertical PD's error is the sag, the compensation or the torque
 from __future__ import annotations
 
 import dataclasses
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -238,7 +239,7 @@ class Vertical:
             for r in self.runs
         ]
         headers = ("law", "sensor", "plane", "RMS error (mm)", "max error (mm)", "max torque (N m)")
-        doc = (__doc__ or "").split("\n\n")[1:3]
+        doc = [_plain(d) for d in (__doc__ or "").split("\n\n")[1:3]]
         chosen = "; ".join(f"{s}: {n}" for s, n in self.chosen.items())
         return (
             f"<h3>The square in a vertical plane (gravity {_html.escape(str(GRAVITY))} "
@@ -385,6 +386,12 @@ def run_vertical(
     theta = arm.inverse_kinematics(np.asarray(square.evaluate(t)[0]))
     holding = float(np.max(np.abs(rest_tips(arm, theta)[1])))
     return Vertical(runs, chosen, sag_rms, sag_max, holding, tip_weights)
+
+
+def _plain(text: str) -> str:
+    """Docstring text without its reST markup (roles to their last name, literals bare)."""
+    text = re.sub(r":\w+:`~?(?:[\w.]+\.)?([\w]+)`", r"\1", text)
+    return text.replace("``", "")
 
 
 def _run_text(r: VerticalRun) -> str:
