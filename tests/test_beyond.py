@@ -73,7 +73,7 @@ def test_targets_and_the_adaptation_verdict_on_constructed_runs():
 
 
 def test_a_short_run_of_the_study():
-    b = run_beyond(0.3, 2e-4, workers=2)
+    b = run_beyond(0.3, 2e-4, workers=2, vertical=False)  # the vertical part: its own tests
     assert set(b.chosen) == {"tip", "point:1:0.5"} and set(b.chosen.values()) <= set(LQG_CANDIDATES)
     assert 0.5 < b.alpha_limit < 1.0
     # the runs the study is to make, each once: every LQG candidate on every row for

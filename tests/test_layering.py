@@ -84,6 +84,7 @@ WITHIN: dict[str, list[str]] = {
         "_gains",
         "_lqg_layout",
         "trajectories",
+        "sag",
         "_ei",
         "shapers",
         "statespace",

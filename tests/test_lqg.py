@@ -170,7 +170,7 @@ def test_the_layout_holds_the_design_where_it_says():
     reference[:, 7] = [1.0, 2.0]  # theta_2: the grid spans [0.95, 2.05]
     params = law.design(ARM, TipSensor(), 2e-4, reference)
     layout = LQGLayout.of(params, 2)
-    assert layout == (2 * ARM.n_dof, 2, 4, 3)
+    assert layout == (2 * ARM.n_dof, 2, 4, 3, 1)  # one shoulder angle: no gravity
     np.testing.assert_allclose(layout.grid(params), [0.95, 1.5, 2.05], rtol=1e-15)
     assert params[GAIN] == 1.5 and params[POINT] == 1.0
     sys = linearize(ARM, np.array([0.0, 1.5]), sensor=TipSensor(), rates=True).discretize(2e-4)

@@ -88,7 +88,8 @@ delay, as the paper simulated it) and with the physical one (the deflected point
 sensitivity study (the paper's model under each delay model: none, the seed's wave
 speed, the dispersive bending-wave speed; the fuzzy law over a range of ks and both
 adaptation laws); and, beyond the paper, flexarm's LQG and reflected-tip laws on the
-physical distant sensors with their robustness rows. Writes a table, figures, a
+physical distant sensors with their robustness rows, and the square in a vertical
+plane (the arm on its shoulder under gravity). Writes a table, figures, a
 self-contained HTML report and a JSON summary, and states for each of the paper's
 claims whether the model supports it.
 """
@@ -155,7 +156,8 @@ def add_parser(sub: Any) -> None:
         action=argparse.BooleanOptionalAction,
         default=True,
         help="run the study beyond the paper: LQG and the reflected tip on the physical "
-        "distant sensors, with robustness rows (default on)",
+        "distant sensors, with robustness rows, and the square in a vertical plane "
+        "(default on)",
     )
     p.add_argument(
         "--converged",

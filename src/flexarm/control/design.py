@@ -113,7 +113,13 @@ def _riccati(sys: StateSpace, a: F64, b: F64, q: F64, r: F64, failure: str) -> F
     try:
         x: F64 = solve(a, b, q, r)
     except (np.linalg.LinAlgError, ValueError) as exc:
-        raise InvalidValueError(f"{failure}: {exc}") from exc
+        # SciPy's balancing can itself leave the pencil too ill-conditioned to reorder
+        # (a sampled model with poles near z = 1 on both sides of it, as an arm holding
+        # its weight has): the unbalanced pencil, before giving up
+        try:
+            x = solve(a, b, q, r, balanced=False)
+        except (np.linalg.LinAlgError, ValueError):
+            raise InvalidValueError(f"{failure}: {exc}") from exc
     return x
 
 

@@ -63,27 +63,35 @@ from ..fuzzy import FuzzySystem, paper_system, workspace_size
 from ..fuzzy._kernels import evaluate_into_kernel, unpack_system_kernel
 from ..fuzzy.compiled import pack_system
 from ..model.arm import FlexibleArm
+from ..model.kinematics import lever_lengths, rigid_point
 from ..model.plant import Plant
 from ..sensing.sensors import JointSensor, PointSensor, Sensor, TipSensor
 from ._lqg_layout import (
+    ABSOLUTE,
     FUZZY,
     GAIN,
     HEAD,
     KS,
     LAMBDA0,
     N_GRID,
+    N_GRID1,
     NX,
     NY,
+    OPS,
+    OPS_N,
+    OPS_N1,
     POINT,
     LQGLayout,
     block_parts,
+    operating_parts,
     pack_block,
     pack_parameters,
     state_parts,
 )
 from .controllers import Controller, gaussian_smoothing, ringing_frequency, wrap_control_function
 from .design import kalman, lqr
-from .linearize import linearize
+from .gravity_compensation import holding_torques, scratch_size
+from .linearize import linearize, measure
 from .signals import (
     r_angles,
     r_position,
@@ -101,8 +109,30 @@ _OWNER = "LQG"
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _lerp(p: F64, o0: int, o1: int, w: float, k: int) -> float:  # pragma: no cover
-    return float((1.0 - w) * p[o0 + k] + w * p[o1 + k])
+def _lerp(
+    p: F64, o00: int, o01: int, o10: int, o11: int, u: float, w: float, k: int
+) -> float:  # pragma: no cover
+    """Entry ``k`` of the blocks at ``o..`` blended bilinearly (``w`` along the elbow
+    grid, ``u`` along the shoulder's; ``u = 0``: the elbow's alone, exactly)."""
+    v = (1.0 - w) * p[o00 + k] + w * p[o01 + k]
+    if u == 0.0:
+        return float(v)
+    return float((1.0 - u) * v + u * ((1.0 - w) * p[o10 + k] + w * p[o11 + k]))
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _cell(grid: F64, x: float) -> tuple[int, float]:  # pragma: no cover
+    """The cell of ``grid`` (increasing) holding ``x`` and the weight of its upper end
+    (clamped to [0, 1] outside; one point: cell 0, weight 0)."""
+    g = grid.shape[0]
+    j = 0
+    while j < g - 2 and x > grid[j + 1]:
+        j += 1
+    w = 0.0
+    if g > 1:
+        w = (x - grid[j]) / (grid[j + 1] - grid[j])
+        w = min(max(w, 0.0), 1.0)
+    return j, w
 
 
 @nb.njit(cache=True, nogil=True)
@@ -111,23 +141,36 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
     Notes."""
     nu = tau.shape[0]
     nx, ny, ng = int(p[NX]), int(p[NY]), int(p[N_GRID])
+    ng1, absolute = int(p[N_GRID1]), p[ABSOLUTE] != 0.0
     point = p[POINT] != 0.0
     gain, ks, lam0, fo = p[GAIN], p[KS], p[LAMBDA0], int(p[FUZZY])
-    grid = p[HEAD : HEAD + ng]
     f_phi, f_gam, f_c, f_k, f_m, blk = block_parts(nx, nu, ny)
-    base = HEAD + ng
-    # --- the schedule: interpolate between the grid points around theta_2
+    base = HEAD + ng + ng1
+    # --- the schedule: interpolate between the grid points around (theta_1,) theta_2
     ra = r_angles(nu)
     th1, th2 = r[ra], r[ra + 1]
-    j = 0
-    while j < ng - 2 and th2 > grid[j + 1]:
-        j += 1
-    w = 0.0
-    if ng > 1:
-        w = (th2 - grid[j]) / (grid[j + 1] - grid[j])
-        w = min(max(w, 0.0), 1.0)
-    o0 = base + j * blk
-    o1 = base + min(j + 1, ng - 1) * blk
+    j, w = _cell(p[HEAD : HEAD + ng], th2)
+    i, u = _cell(p[HEAD + ng : HEAD + ng + ng1], th1)
+    j1, i1 = min(j + 1, ng - 1), min(i + 1, ng1 - 1)
+    o00, o01 = base + (i * ng + j) * blk, base + (i * ng + j1) * blk
+    o10, o11 = base + (i1 * ng + j) * blk, base + (i1 * ng + j1) * blk
+    # the operating point: holding torques and output offset, from the finer table
+    ops, width = int(p[OPS]), nu + ny
+    q00 = q01 = q10 = q11 = 0
+    uo = wo = 0.0
+    d2 = d1 = 0.0  # the reference's rates over the table's spacings (1/s)
+    if ops > 0:
+        h, h1 = int(p[OPS_N]), int(p[OPS_N1])
+        g2o, g1o, rows = operating_parts(ops, nu, ny, h, h1)
+        jo, wo = _cell(p[g2o : g2o + h], th2)
+        io, uo = _cell(p[g1o : g1o + h1], th1)
+        jo1, io1 = min(jo + 1, h - 1), min(io + 1, h1 - 1)
+        q00, q01 = rows + (io * h + jo) * width, rows + (io * h + jo1) * width
+        q10, q11 = rows + (io1 * h + jo) * width, rows + (io1 * h + jo1) * width
+        if jo1 > jo:
+            d2 = r[r_rates(nu) + 1] / (p[g2o + jo1] - p[g2o + jo])
+        if io1 > io:
+            d1 = r[r_rates(nu)] / (p[g1o + io1] - p[g1o + io])
     s_du, s_xp, s_innov, s_fuzzy, s_gain, s_work = state_parts(nx, nu, ny)
     xh = s[0:s_du]
     du = s[s_du : s_du + nu]
@@ -137,14 +180,20 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
     for a in range(nx):
         acc = 0.0
         for b in range(nx):
-            acc += _lerp(p, o0 + f_phi, o1 + f_phi, w, a * nx + b) * xh[b]
+            acc += (
+                _lerp(p, o00 + f_phi, o01 + f_phi, o10 + f_phi, o11 + f_phi, u, w, a * nx + b)
+                * xh[b]
+            )
         for b in range(nu):
-            acc += _lerp(p, o0 + f_gam, o1 + f_gam, w, a * nu + b) * du[b]
+            acc += (
+                _lerp(p, o00 + f_gam, o01 + f_gam, o10 + f_gam, o11 + f_gam, u, w, a * nu + b)
+                * du[b]
+            )
         xp[a] = acc
     # --- the measurement's deviation from the reference (in the design frame)
     if point:
         yp, yv, rp, rv = y_point(nu), y_point_rate(nu), r_position(nu), r_velocity(nu)
-        c, sn = np.cos(th1), np.sin(th1)
+        c, sn = (1.0, 0.0) if absolute else (np.cos(th1), np.sin(th1))
         ex, ey = y[yp] - r[rp], y[yp + 1] - r[rp + 1]
         vx, vy = y[yv] - r[rv], y[yv + 1] - r[rv + 1]
         innov[0] = c * ex + sn * ey
@@ -156,16 +205,24 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
         for i in range(nu):
             innov[i] = y[ya + i] - r[ra + i]
             innov[nu + i] = y[yr + i] - r[rr + i]
-    for a in range(ny):
+    half = ny // 2
+    for a in range(ny):  # less the output's offset at the operating point, and C xp
         acc = 0.0
+        if ops > 0 and a < half:  # the offset (the sag) ...
+            acc = _lerp(p, q00, q01, q10, q11, uo, wo, nu + a)
+        elif ops > 0:  # ... and its rate along the reference: d y0/d theta . dtheta_ref
+            k = nu + a - half
+            f00, f01, f10, f11 = p[q00 + k], p[q01 + k], p[q10 + k], p[q11 + k]
+            acc = d2 * ((1.0 - uo) * (f01 - f00) + uo * (f11 - f10))
+            acc += d1 * ((1.0 - wo) * (f10 - f00) + wo * (f11 - f01))
         for b in range(nx):
-            acc += _lerp(p, o0 + f_c, o1 + f_c, w, a * nx + b) * xp[b]
+            acc += _lerp(p, o00 + f_c, o01 + f_c, o10 + f_c, o11 + f_c, u, w, a * nx + b) * xp[b]
         innov[a] -= acc
     # --- measurement update and control
     for a in range(nx):
         acc = xp[a]
         for b in range(ny):
-            acc += _lerp(p, o0 + f_m, o1 + f_m, w, a * ny + b) * innov[b]
+            acc += _lerp(p, o00 + f_m, o01 + f_m, o10 + f_m, o11 + f_m, u, w, a * ny + b) * innov[b]
         xh[a] = acc
     if ks > 0.0:  # fuzzy adaptation: the paper's system reads the estimated deflections
         nd = nx // 2
@@ -181,9 +238,11 @@ def lqg_law(t: float, y: F64, r: F64, p: F64, s: F64, tau: F64) -> None:  # prag
     for a in range(nu):
         acc = 0.0
         for b in range(nx):
-            acc -= _lerp(p, o0 + f_k, o1 + f_k, w, a * nx + b) * xh[b]
+            acc -= _lerp(p, o00 + f_k, o01 + f_k, o10 + f_k, o11 + f_k, u, w, a * nx + b) * xh[b]
         du[a] = gain * acc
         tau[a] = gain * acc
+        if ops > 0:  # the holding torques of the reference posture
+            tau[a] += _lerp(p, q00, q01, q10, q11, uo, wo, a)
 
 
 lqg_cfunc = wrap_control_function(lqg_law, cache=True)
@@ -252,6 +311,13 @@ class LQG(Controller):
     fls: FuzzySystem | None = None
     name = "lqg"
     feedforward = True
+
+    @property
+    def gravity_compensation(self) -> bool:  # type: ignore[override]
+        """Whether the simulator adds the measured posture's holding torques: only for
+        a design model without gravity given apart from the plant (a design with
+        gravity holds the weight itself, module docstring)."""
+        return self.model is not None and self.model.gravity is None
 
     def __post_init__(self) -> None:
         if self.model is not None and not isinstance(self.model, FlexibleArm):
@@ -366,20 +432,19 @@ class LQG(Controller):
         point = link >= 0
         n_links = model.n_links
         ra = r_angles(n_links)
-        th2 = reference[:, ra + 1]
-        lo, hi = float(np.min(th2)) - 0.05, float(np.max(th2)) + 0.05
-        grid = (
-            np.linspace(lo, hi, self.schedule_points)
-            if self.schedule_points > 1
-            else np.array([0.5 * (lo + hi)])
-        )
+        grid = self._grid(reference[:, ra + 1])
+        # with gravity the dynamics depend on theta_1 too: a grid of it, absolute frame
+        shoulder = self._grid(reference[:, ra]) if model.gravity is not None else None
         pos_noise, vel_noise = self._noise(sensor)
         nx = 2 * model.n_dof
         link, distance, _ = sensor.resolve(model)
         geometry = _Geometry(link=link, distance=distance, model=sensor.model)
         weights = (self.position_weight, self.velocity_weight, self.torque_weight)
         noises = (self.torque_noise, pos_noise, vel_noise)
-        blocks, ny = _design_blocks(model, geometry, float(dt), tuple(grid), weights, noises)
+        shoulder_points = None if shoulder is None else tuple(shoulder)
+        blocks, ny = _design_blocks(
+            model, geometry, float(dt), tuple(grid), weights, noises, shoulder_points
+        )
         fuzzy: list[F64] = []
         lam0 = 1.0
         if self.ks > 0:
@@ -402,7 +467,22 @@ class LQG(Controller):
                 tips[i, ms[i] : ms[i + 1]] = model.arrays.tip_deflection[ms[i] : ms[i + 1]]
             fuzzy = [tips.ravel(), pack_system(fls.compiled())]
         head = (nx, ny, grid.shape[0], 1.0 if point else 0.0, self.gain, self.ks, lam0)
-        return pack_parameters(head, grid, blocks, fuzzy)
+        operating = None
+        if shoulder is not None:  # the weight held by the law, on a finer grid
+            fine = [
+                np.linspace(g[0], g[-1], _TABLE_REFINEMENT * (g.shape[0] - 1) + 1)
+                for g in (grid, shoulder)
+            ]
+            rows = _operating_table(model, geometry, tuple(fine[0]), tuple(fine[1]))
+            operating = (fine[0], fine[1], rows)
+        return pack_parameters(head, grid, blocks, fuzzy, shoulder, operating)
+
+    def _grid(self, angles: F64) -> F64:
+        """``schedule_points`` evenly spaced over ``angles``' range and 0.05 rad beyond."""
+        lo, hi = float(np.min(angles)) - 0.05, float(np.max(angles)) + 0.05
+        if self.schedule_points > 1:
+            return np.linspace(lo, hi, self.schedule_points)
+        return np.array([0.5 * (lo + hi)])
 
 
 _MEASUREMENT_FLOOR = 1e-2
@@ -433,17 +513,23 @@ def _design_blocks(
     grid: tuple[float, ...],
     weights: tuple[float, float, float],
     noises: tuple[float, float, float],
+    shoulder: tuple[float, ...] | None = None,
 ) -> tuple[list[F64], int]:
-    """Per grid point ``Phi, Gamma, C, K, M`` flattened, and the measurement's size
-    (cached: runs that share a design solve its Riccati equations once)."""
+    """Per grid point ``Phi, Gamma, C, K, M`` flattened, and the
+    measurement's size (cached: runs that share a design solve its Riccati equations
+    once). ``shoulder`` None: at ``theta_1 = 0``; else on the grid of both angles,
+    shoulder-major, about the gravity equilibrium of each posture."""
     qp, qv, rt = weights
     tn, pos_noise, vel_noise = noises
     sensor = _sensor_of(geometry)
     nx, n_links = 2 * model.n_dof, model.n_links
     blocks = []
     ny = 0
-    for th in grid:
-        theta = np.array([0.0, th])
+    postures = [(0.0, th) for th in grid]
+    if shoulder is not None:
+        postures = [(t1, th) for t1 in shoulder for th in grid]
+    for posture in postures:
+        theta = np.array(posture)
         meas = linearize(model, theta, sensor=sensor, rates=True).discretize(dt)
         tip = linearize(model, theta, output="tip", rates=True)
         ny = meas.n_outputs
@@ -457,6 +543,49 @@ def _design_blocks(
     for b in blocks:
         b.flags.writeable = False
     return blocks, ny
+
+
+_TABLE_REFINEMENT = 4
+"""The operating table's grid is this many times finer than the design's (the
+holding torques vary by some 100 N m over the square: interpolated on the design's
+grid they would be off by about a newton metre, a standing error of the loop)."""
+
+
+@functools.lru_cache(maxsize=16)
+def _operating_table(
+    model: FlexibleArm, geometry: _Geometry, elbow: tuple[float, ...], shoulder: tuple[float, ...]
+) -> F64:
+    """Rows (len(shoulder), len(elbow), nu + ny), shoulder-major: at each posture the
+    holding torques (N m; the compiled statics of
+    :mod:`flexarm.control.gravity_compensation`, the sag of
+    :meth:`FlexibleArm.equilibrium`) and the measurement at rest there less what the
+    law subtracts from the reference (the sensed point's sag, m; rates zero; the
+    encoders' offset, rad, for the joint sensor)."""
+    sensor = _sensor_of(geometry)
+    nu, n = model.n_links, model.n_dof
+    link, distance, _ = sensor.resolve(model)
+    ny = 4 if link >= 0 else 2 * nu
+    postures = np.array([(t1, t2) for t1 in shoulder for t2 in elbow], dtype=float)
+    q = np.zeros((postures.shape[0], n))
+    tau = np.zeros((postures.shape[0], nu))
+    scratch = np.zeros(scratch_size(n, nu))
+    for k, theta in enumerate(postures):
+        holding_torques(theta, model.arrays, scratch, tau[k])
+        q[k] = scratch[:n]
+    if model.has_flexible_joints:  # the motors ahead of their links by the springs' deflection
+        for k, theta in enumerate(postures):
+            q[k] = model.equilibrium(theta).q
+    y = measure(model, sensor, q, np.zeros_like(q))
+    y0 = np.zeros((postures.shape[0], ny))
+    if link >= 0:
+        levers = lever_lengths(model.link_lengths, link, distance)
+        rp = y_point(nu)
+        y0[:, :2] = y[:, rp : rp + 2] - rigid_point(levers, postures)[0]
+    else:
+        y0[:, :nu] = y[:, y_angles(nu) : y_angles(nu) + nu] - postures
+    rows = np.concatenate([tau, y0], axis=1).reshape(len(shoulder), len(elbow), nu + ny)
+    rows.flags.writeable = False
+    return rows
 
 
 def closed_loop_growth(
@@ -475,6 +604,12 @@ def closed_loop_growth(
     boundary): this is the linear test of the robustness rows.
     """
     model = law._model(plant)
+    if model.gravity is not None or plant.gravity is not None:
+        raise InvalidValueError(
+            "The 'plant' parameter of closed_loop_growth must be an arm without gravity (the "
+            "linear loop about rest on the elbow schedule). Got an arm with gravity "
+            f"{(model.gravity if model.gravity is not None else plant.gravity)!r} instead."
+        )
     reference = np.zeros((len(theta2), 6 + 4 * model.n_links))
     reference[:, r_angles(model.n_links) + 1] = theta2
     params = law.design(model, sensor, dt, reference)

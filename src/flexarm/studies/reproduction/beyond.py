@@ -21,6 +21,11 @@ with constant gains over the range the adaptation can reach
 (:data:`CONSTANT_GAINS`, 1 to 5 for the paper's fuzzy system): the adaptation
 counts only if it beats every one of them.
 
+The square in a vertical plane (:mod:`~flexarm.studies.reproduction.vertical`):
+the same arm standing on its shoulder under gravity, the best of a fixed list
+of laws per sensor (joint encoders, tip) by a rule stated in advance, beside the
+horizontal figures, and why the paper's law loses there.
+
 Targets (the issue's, measured here, never tuned to): the tip sensor alone RMS
 <= 0.02 m and max <= 0.12 m; the point 0.5 m from the elbow alone RMS <= 0.035
 m; torque within 100 N m; every row within 1.5x of its nominal RMS.
@@ -47,6 +52,7 @@ from ...sensing.sensors import PointSensor, TipSensor
 from ...sim.batch import Outcome, simulate_many
 from ...sim.results import SimulationError
 from .units import mm, sig
+from .vertical import Vertical, run_vertical
 
 __all__ = [
     "CONSTANT_GAINS",
@@ -156,6 +162,8 @@ class Beyond:
         (1/s; :func:`flexarm.control.lqg.closed_loop_growth`) over the elbow angles
         the square visits. Positive: the loop linearised at rest grows there (a run
         may still stay bounded, passing through those angles briefly).
+    vertical : Vertical or None
+        The square in a vertical plane (None: not run).
     """
 
     chosen: dict[str, str]
@@ -163,6 +171,7 @@ class Beyond:
     alpha_limit: float
     targets: list[dict[str, str | float | bool | None]] = field(default_factory=list)
     growth: dict[str, dict[str, float]] = field(default_factory=dict)
+    vertical: Vertical | None = None
 
     def of(self, law: str, sensor: str) -> list[RowResult]:
         """The runs of ``law`` with ``sensor``."""
@@ -204,6 +213,7 @@ class Beyond:
             "targets": [dict(x) for x in self.targets],
             "adaptation": adaptation,
             "linear_growth_per_s": {s: dict(g) for s, g in self.growth.items()},
+            "vertical": None if self.vertical is None else self.vertical.summary(),
         }
 
     def text_lines(self) -> list[str]:
@@ -225,6 +235,8 @@ class Beyond:
         for sensor, rates in self.growth.items():
             text = ", ".join(f"{row} {rate:+.3g}" for row, rate in rates.items())
             lines.append(f"  linear growth rate of the chosen LQG, {sensor} (1/s): {text}")
+        if self.vertical is not None:
+            lines += self.vertical.text_lines()
         met = sum(bool(x["met"]) for x in self.targets)
         lines.append(f"  targets met: {met} of {len(self.targets)}")
         lines += [
@@ -289,7 +301,7 @@ class Beyond:
                 f"adaptation {'helps' if helps else 'does not help'}.</li>"
             )
         chosen = "; ".join(f"{label(s)}: {name}" for s, name in self.chosen.items())
-        doc = (__doc__ or "").split("\n\n")[1:4]
+        doc = (__doc__ or "").split("\n\n")[1:5]
         return (
             "<h2>Beyond the paper: tracking with a physical distant sensor</h2>"
             + "".join(f"<p>{_html.escape(' '.join(d.split()))}</p>" for d in doc)
@@ -304,6 +316,7 @@ class Beyond:
                 for s, g in self.growth.items()
             )
             + "</ul>"
+            + ("" if self.vertical is None else self.vertical.html())
             + f"<h3>Every run</h3>{runs}"
         )
 
@@ -373,8 +386,11 @@ def choose_candidate(results: Sequence[RowResult], sensor: str) -> str:
     return min(LQG_CANDIDATES, key=worst)
 
 
-def run_beyond(duration: float | None, dt: float, *, workers: int = 1) -> Beyond:
-    """Run the study (module docstring) for ``duration`` s a run (None: the square)."""
+def run_beyond(
+    duration: float | None, dt: float, *, workers: int = 1, vertical: bool = True
+) -> Beyond:
+    """Run the study (module docstring) for ``duration`` s a run (None: the square);
+    ``vertical``: with the square in a vertical plane."""
     design = FlexibleArm.paper()
     alpha = reflection_limit(design, TipSensor(), list(Square().corners))
     jobs: list[Job] = []
@@ -408,6 +424,21 @@ def run_beyond(duration: float | None, dt: float, *, workers: int = 1) -> Beyond
             for row in ROWS
             if row.noise == 0 and row.delay_s == 0
         }
+    if vertical:
+        tip: dict[str, tuple[float | None, float | None, float | None]] = {}
+        for key, name in (("lqg", f"lqg {chosen['tip']}"), ("reflected", "reflected")):
+            r = next(r for r in beyond.of(name, "tip") if r["row"] == nominal.name)
+            tip[key] = (r["rms_error_m"], r["max_error_m"], r["max_torque_Nm"])
+        beyond.vertical = run_vertical(
+            duration,
+            dt,
+            smoothing=SMOOTHING,
+            tip_weights=chosen["tip"],
+            tip_weight_values=LQG_CANDIDATES[chosen["tip"]],
+            alpha=0.9 * alpha,
+            horizontal_tip=tip,
+            workers=workers,
+        )
     return beyond
 
 
