@@ -30,16 +30,7 @@ def pytest_sessionstart(session):
     if hasattr(config, "workerinput") or not config.pluginmanager.has_plugin("dsession"):
         return
     script = Path(__file__).parent / "helpers" / "warm_up.py"
-    shares = [
-        subprocess.Popen(
-            [sys.executable, str(script), str(i)],
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-        )
-        for i in range(2)
-    ]
-    for share in shares:
-        share.wait()
+    subprocess.run([sys.executable, str(script)], check=False)
 
 
 UNIT = re.compile(r"^\S.* \([^()]+\)$")  # "quantity (unit)"; "(-)" when dimensionless
