@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import os
 import re
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 from hypothesis import settings
@@ -15,6 +18,20 @@ from hypothesis import settings
 settings.register_profile("ci", derandomize=True)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+
+def pytest_sessionstart(session):
+    """Under pytest-xdist, compile the kernels nearly every test calls into Numba's
+    on-disk cache before the workers start, in parallel shares
+    (``helpers/warm_up.py``): from a cold cache the workers would each compile them,
+    at the same time. Nothing is done in a worker or without xdist; a failed share
+    costs only time (the tests then compile what they call)."""
+    config = session.config
+    if hasattr(config, "workerinput") or not config.pluginmanager.has_plugin("dsession"):
+        return
+    script = Path(__file__).parent / "helpers" / "warm_up.py"
+    subprocess.run([sys.executable, str(script)], check=False)
+
 
 UNIT = re.compile(r"^\S.* \([^()]+\)$")  # "quantity (unit)"; "(-)" when dimensionless
 SMALLEST_FONT = 6.0  # points: the least a printed figure may carry
