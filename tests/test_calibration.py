@@ -16,6 +16,7 @@ from flexarm.calibration.model import Predictor, build_plant
 from flexarm.errors import CalibrationError
 from flexarm.model.drives import Drive
 from flexarm.sensing.instruments import Encoder, JointDeflection, StrainGauge, delayed
+from helpers.arms import two_rigid_rods_mass_matrix
 
 FS = 250.0  # Hz
 
@@ -197,6 +198,63 @@ def _joint_config(tmp_path, path, parameters, deflection_delay=0.0):
         ],
     }
     return CalibrationConfig.from_dict(data, "joint.toml", tmp_path)
+
+
+def _driven_rods_config(tmp_path, joints=None):
+    """Two uniform rods (no modes), each joint driven by a motor with a rotor behind a
+    gear (stage 1 of the Quanser rig's numbers on joint 1, a 7:1 elbow)."""
+    arm = {
+        "links": [
+            {"length": 1.0, "flexural_rigidity": 1.0, "linear_density": 1.3, "n_modes": 0},
+            {"length": 0.8, "flexural_rigidity": 1.0, "linear_density": 0.7, "n_modes": 0},
+        ]
+    }
+    if joints is not None:
+        arm["joints"] = joints
+    data = {
+        "calibration": {"data": "."},
+        "arm": arm,
+        "drives": [
+            {"joint": 0, "torque_constant": 0.119, "gear_ratio": 100, "rotor_inertia": 6.28e-6},
+            {"joint": 1, "torque_constant": 0.05, "gear_ratio": 7, "rotor_inertia": 4e-4},
+        ],
+        "outputs": {"hub": {"kind": "encoder", "joint": 0}},
+        "parameters": [{"key": "drives[0].torque_constant", "bounds": [0.05, 0.2]}],
+        "records": [
+            {
+                "file": "run.npz",
+                "time": {"variable": "time", "unit": "s"},
+                "inputs": [{"joint": 0, "kind": "current", "variable": "i", "unit": "A"}],
+                "outputs": {"hub": {"variable": "theta", "unit": "rad"}},
+            }
+        ],
+    }
+    return CalibrationConfig.from_dict(data, "rods.toml", tmp_path)
+
+
+def test_a_drives_rotor_is_counted_once_through_its_gear_by_hand(tmp_path):
+    """Rotor 1 (J_r1 behind N1) on the base adds N1**2 J_r1 at theta_1; rotor 2 rides on
+    rod 1 and turns at theta_1' + N2 theta_2', T = 1/2 J_r2 (theta_1' + N2 theta_2')**2:
+    J_r2 at (theta_1, theta_1), N2 J_r2 at (theta_1, theta_2), N2**2 J_r2 at
+    (theta_2, theta_2). A rotor taken as a hub turning with rod 2 would add N2**2 J_r2
+    at all three."""
+    jr1, n1, jr2, n2 = 6.28e-6, 100.0, 4e-4, 7.0
+    q = np.array([0.3, -0.7])
+    expected = two_rigid_rods_mass_matrix(1.3, 1.0, 0.7 * 0.8, 0.8, q[1])
+    expected[0, 0] += n1**2 * jr1 + jr2
+    expected[0, 1] += n2 * jr2
+    expected[1, 0] += n2 * jr2
+    expected[1, 1] += n2**2 * jr2
+    arm = build_plant(_driven_rods_config(tmp_path)).arm
+    np.testing.assert_allclose(arm.mass_matrix(q), expected, rtol=1e-13)
+    # a rigid joint with a rotor of its own at the same gear carries both
+    rigid = {"kind": "rigid", "motor_inertia": 0.02, "gear_ratio": 7}
+    with pytest.raises(CalibrationError, match="gear ratio of 100") as err:
+        build_plant(_driven_rods_config(tmp_path, rigid))
+    assert err.value.key == "drives"
+    del rigid["motor_inertia"]  # no rotor of its own: the drive's gear is the joint's
+    arm = build_plant(_driven_rods_config(tmp_path, rigid)).arm
+    np.testing.assert_allclose(arm.mass_matrix(q), expected, rtol=1e-13)
 
 
 STIFFNESS = {"name": "k", "key": "arm.joints.stiffness", "bounds": [0.5, 50.0]}

@@ -28,6 +28,7 @@ from .._types import F64
 from ..errors import CalibrationError, ConfigFileError, FlexarmError, UnstableStepError
 from ..model.arm import FlexibleArm
 from ..model.drives import Drive
+from ..model.joints import RigidJoint
 from ..sensing.instruments import Encoder, Instrument, delayed
 from ..sim.open_loop import simulate_open_loop
 from ..sim.prescribed import JointMotion, motion_from_samples, simulate_prescribed
@@ -53,9 +54,12 @@ def build_plant(config: CalibrationConfig, values: Sequence[float] | F64 | None 
     """The plant with ``values`` (one per parameter, default their initial values)
     written into the file's tables.
 
-    A drive's rotor, reflected through its gear (``N**2 J_r``), is added on the
-    motor side of its joint: to the link's hub inertia behind a rigid joint, to the
-    joint's motor inertia behind a flexible one.
+    A drive's rotor (``rotor_inertia`` ``J_r`` behind ``gear_ratio`` ``N``) is
+    carried by its joint as the arm counts a rotor (:class:`~flexarm.model.arm.FlexibleArm`):
+    ``N**2 J_r`` added to the joint's motor inertia, the joint's gear ratio ``N``, so
+    that the rotor turns at its carrier's rate plus ``N`` times the joint's and adds
+    ``J_r`` (not ``N**2 J_r``) to its carrier. An arm without joints gets rigid ones
+    (:class:`~flexarm.model.joints.RigidJoint`) for its drives' rotors.
 
     Raises
     ------
@@ -84,7 +88,7 @@ def build_plant(config: CalibrationConfig, values: Sequence[float] | F64 | None 
             drives[joint] = Drive(**{n: v for n, v in d.items() if n != "joint"})  # type: ignore[arg-type]
         except (TypeError, ValueError) as exc:
             raise CalibrationError(config.source, f"drives[{k}]", str(exc)) from None
-    arm = _with_rotors(arm, drives)
+    arm = _with_rotors(arm, drives, config.source)
     outputs: dict[str, Instrument] = {}
     raw_outputs = tables["outputs"]
     assert isinstance(raw_outputs, dict)
@@ -125,20 +129,29 @@ def check_plant(config: CalibrationConfig) -> Plant:
         ) from None
 
 
-def _with_rotors(arm: FlexibleArm, drives: Mapping[int, Drive]) -> FlexibleArm:
+def _with_rotors(arm: FlexibleArm, drives: Mapping[int, Drive], source: str) -> FlexibleArm:
+    """``arm`` with each drive's rotor on its joint: ``N**2 J_r`` added to the joint's
+    motor inertia at the drive's gear ratio ``N``. A joint that has a rotor of its own
+    behind another gear ratio is refused (two rotors on one joint turn at one ratio)."""
     if not any(d.rotor_inertia > 0 for d in drives.values()):
         return arm
-    if arm.joints is None:
-        links = list(arm.links)
-        for j, d in drives.items():
-            links[j] = dataclasses.replace(
-                links[j], hub_inertia=links[j].hub_inertia + d.reflected_inertia
+    joints = list(arm.joints) if arm.joints is not None else [RigidJoint()] * arm.n_links
+    for j, d in sorted(drives.items()):
+        if d.rotor_inertia == 0.0:
+            continue
+        joint = joints[j]
+        if joint.motor_inertia > 0.0 and joint.gear_ratio != d.gear_ratio:
+            raise CalibrationError(
+                source,
+                "drives",
+                f"the drive of joint {j} has a rotor behind a gear ratio of {d.gear_ratio:g}, "
+                f"and the joint a motor inertia behind {joint.gear_ratio:g}: give the joint "
+                "the drive's gear_ratio, or its rotor in one place",
             )
-        return dataclasses.replace(arm, links=links)
-    joints = list(arm.joints)
-    for j, d in drives.items():
         joints[j] = dataclasses.replace(
-            joints[j], motor_inertia=joints[j].motor_inertia + d.reflected_inertia
+            joint,
+            motor_inertia=joint.motor_inertia + d.reflected_inertia,
+            gear_ratio=d.gear_ratio,
         )
     return dataclasses.replace(arm, joints=joints)
 
