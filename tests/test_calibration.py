@@ -62,15 +62,18 @@ BEAM_ARM = {
 GAUGE = {"kind": "strain_gauge", "link": 0, "thickness": 1e-3, "form": "tip_angle"}
 
 
-def _beam_record(path, *, ei=2.0, zeta=0.03, delay=0.04, noise=0.01, seed=0, duration=2.0):
+def _beam_record(
+    path, *, ei=2.0, zeta=0.03, delay=0.04, noise=0.01, seed=0, duration=2.0, offset=0.0
+):
     """An .npz record of the beam: hub angle prescribed, the gauge's tip angle delayed,
-    with white noise of ``noise`` times its standard deviation."""
+    with white noise of ``noise`` times its standard deviation and ``offset`` times
+    that deviation added as the gauge's zero."""
     t = np.arange(round(duration * FS) + 1) / FS
     arm = _beam(ei, zeta)
     run = fa.simulate_prescribed(arm, t, _hub_motion, substeps=4)
     y = delayed(t, StrainGauge(0, 0.0, 1e-3, "tip_angle").raw(arm, run.q), delay)
     rng = np.random.default_rng(seed)
-    y = y + noise * np.std(y) * rng.standard_normal(y.shape)
+    y = y + noise * np.std(y) * rng.standard_normal(y.shape) + offset * np.std(y)
     np.savez(path, time=t, theta=_hub(t), y=y)
     return path
 
@@ -140,6 +143,54 @@ def test_a_scale_factor_and_a_validation_record(tmp_path):
     summary = cal.summary()
     assert [r["name"] for r in summary["validation"]] == ["check.npz"]
     assert summary["validation"][0]["channels"]["tip"]["fit_percent"] > 90
+
+
+def test_a_gauges_zero_offset_per_record_is_fitted_with_the_initial_states(tmp_path):
+    """Each record's gauge reads its tip angle plus a zero of its own (+0.3 and -0.5
+    of the signal's deviation): with ``offset = "fit"`` each record's offset is a
+    nuisance unknown, fitted in training and estimated for the validation record, and
+    the rigidity is recovered; without it the offsets bias the fit."""
+    clean = StrainGauge(0, 0.0, 1e-3, "tip_angle")
+    t = np.arange(round(2.0 * FS) + 1) / FS
+    run = fa.simulate_prescribed(_beam(), t, _hub_motion, substeps=4)
+    std = float(np.std(delayed(t, clean.raw(_beam(), run.q), 0.04)))
+    train = _beam_record(tmp_path / "train.npz", seed=1, offset=0.3)
+    check = _beam_record(tmp_path / "check.npz", seed=2, offset=-0.5)
+    config = _beam_config(tmp_path, [train, check], EI_AND_DAMPING)
+    config.tables["outputs"]["tip"]["offset"] = "fit"
+    records = list(config.records)
+    records[1] = type(records[1])(**{**records[1].__dict__, "role": "validation"})
+    config = type(config)(**{**config.__dict__, "records": tuple(records)})
+    cal = fa.calibrate(config)
+    assert cal.parameters()["EI"]["value"] == pytest.approx(2.0, rel=0.01)
+    assert cal.fit.nuisance[0][-1] == pytest.approx(0.3 * std, rel=0.05)
+    for r in cal.records:
+        assert r.channels["tip"].fit_percent > 95, r.role
+    # the same records without the offsets' unknowns fit worse
+    del config.tables["outputs"]["tip"]["offset"]
+    plain = fa.calibrate(config)
+    assert plain.records[1].channels["tip"].fit_percent < 90
+
+
+def test_an_offset_is_fitted_or_absent(tmp_path):
+    path = _beam_record(tmp_path / "run.npz", duration=0.5)
+    data = {
+        "calibration": {"data": "."},
+        "arm": copy.deepcopy(BEAM_ARM),
+        "outputs": {"tip": {**GAUGE, "offset": 0.1}},
+        "parameters": EI_AND_DAMPING,
+        "records": [
+            {
+                "file": path.name,
+                "time": {"variable": "time", "unit": "s"},
+                "inputs": [{"joint": 0, "kind": "angle", "variable": "theta", "unit": "rad"}],
+                "outputs": {"tip": {"variable": "y", "unit": "rad"}},
+            }
+        ],
+    }
+    with pytest.raises(CalibrationError, match="'fit'") as err:
+        CalibrationConfig.from_dict(data, "bad.toml", tmp_path)
+    assert err.value.key == "outputs.tip.offset"
 
 
 def _joint_record(path, *, stiffness=5.0, constant=0.05, delay=0.0, noise=0.01, seed=0, n=500):

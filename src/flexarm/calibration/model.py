@@ -9,7 +9,10 @@ or the measured torques or currents (through the drives) driving the arm open lo
 record may be cut into segments, each started from the measured state: the
 encoders' angles, at rest (``initial_state = "rest"``) or with their measured rates
 (``"measured"``), the links straight and at rest, or with a fitted first-mode
-deflection and rate as well (``"fit"``): a long record then does not drift.
+deflection and rate as well (``"fit"``): a long record then does not drift. An
+output with ``offset = "fit"`` adds a constant per record to its channel, fitted
+with the initial states (a sensor's zero, which a logger need not reset between
+records).
 """
 
 from __future__ import annotations
@@ -35,7 +38,7 @@ from ..sim.prescribed import JointMotion, motion_from_samples, simulate_prescrib
 from ..sim.results import SimulationError
 from ..sim.scenario import arm_from_tables
 from ..sim.step_check import MARGIN, stable_step
-from .config import OUTPUT_KINDS, CalibrationConfig
+from .config import FIT, OUTPUT_KINDS, CalibrationConfig
 from .records import Record
 
 __all__ = ["Plant", "Predictor", "build_plant", "check_plant"]
@@ -96,7 +99,7 @@ def build_plant(config: CalibrationConfig, values: Sequence[float] | F64 | None 
         assert isinstance(spec, dict)
         cls = OUTPUT_KINDS[str(spec.get("kind", "encoder"))]
         try:
-            outputs[name] = cls(**{n: v for n, v in spec.items() if n != "kind"})
+            outputs[name] = cls(**{n: v for n, v in spec.items() if n not in ("kind", "offset")})
         except (TypeError, ValueError) as exc:
             raise CalibrationError(config.source, f"outputs.{name}", str(exc)) from None
     return Plant(arm, drives, outputs)
@@ -206,6 +209,13 @@ class Predictor:
         self.encoders: list[dict[int, F64]] = []
         plant = check_plant(config)
         self.substeps = self._substeps(plant)
+        raw_outputs = config.tables["outputs"]
+        assert isinstance(raw_outputs, dict)
+        self.offsets = tuple(
+            name
+            for name, spec in raw_outputs.items()
+            if isinstance(spec, dict) and spec.get("offset") == FIT
+        )
         for k, rec in enumerate(self.records):
             n = rec.t.shape[0]
             per = n if s.segment <= 0 else max(2, round(s.segment / rec.dt))
@@ -267,12 +277,21 @@ class Predictor:
         }
 
     def n_nuisance(self, plant: Plant, k: int) -> int:
+        """Nuisance parameters of record ``k``: its initial states
+        (:meth:`n_initial`), then the zero offset of each of its channels with
+        ``offset = "fit"``, in :attr:`offsets` order."""
+        return self.n_initial(plant, k) + len(self._offset_channels(k))
+
+    def n_initial(self, plant: Plant, k: int) -> int:
         """Initial-state parameters of record ``k``: the first mode's deflection and
         rate of each flexible link, per segment (with ``initial_state = "fit"``)."""
         if self.config.settings.initial_state != "fit":
             return 0
         flexible = sum(1 for m in plant.arm.n_modes if m > 0)
         return 2 * flexible * len(self.segments[k])
+
+    def _offset_channels(self, k: int) -> list[str]:
+        return [name for name in self.offsets if name in self.records[k].outputs]
 
     def _initial_state(self, plant: Plant, k: int, i0: int, nuisance: F64) -> F64:
         arm, rec = plant.arm, self.records[k]
@@ -312,7 +331,8 @@ class Predictor:
         (NaN from where a segment diverged)."""
         arm, rec, s = plant.arm, self.records[k], self.config.settings
         substeps = self.for_plant(plant).substeps
-        nu = np.zeros(self.n_nuisance(plant, k)) if nuisance is None else np.asarray(nuisance)
+        n_initial = self.n_initial(plant, k)
+        nu = np.zeros(n_initial) if nuisance is None else np.asarray(nuisance)[:n_initial]
         per_segment = nu.size // max(1, len(self.segments[k]))
         q = np.full((rec.t.shape[0], arm.n_dof), np.nan)
         torque = None if self.motions[k] is not None else self._torques(plant, rec)
@@ -370,11 +390,15 @@ class Predictor:
 
     def predict(self, plant: Plant, k: int, nuisance: F64 | None = None) -> dict[str, F64]:
         """The predicted channels of record ``k`` (SI, shape (K,) each), each
-        instrument's delay applied."""
+        instrument's delay applied, and the fitted zero offsets added."""
         rec = self.records[k]
         q = self.states(plant, k, nuisance)
+        offsets = dict.fromkeys(rec.outputs, 0.0)
+        if nuisance is not None:
+            tail = np.asarray(nuisance)[self.n_initial(plant, k) :]
+            offsets.update(zip(self._offset_channels(k), (float(v) for v in tail), strict=True))
         out = {}
         for name in rec.outputs:
             inst = plant.outputs[name]
-            out[name] = delayed(rec.t, inst.raw(plant.arm, q), inst.delay)
+            out[name] = delayed(rec.t, inst.raw(plant.arm, q), inst.delay) + offsets[name]
         return out
