@@ -16,6 +16,7 @@ from flexarm.calibration.model import Predictor, build_plant
 from flexarm.errors import CalibrationError
 from flexarm.model.drives import Drive
 from flexarm.sensing.instruments import Encoder, JointDeflection, StrainGauge, delayed
+from helpers.arms import two_rigid_rods_mass_matrix
 
 FS = 250.0  # Hz
 
@@ -61,15 +62,18 @@ BEAM_ARM = {
 GAUGE = {"kind": "strain_gauge", "link": 0, "thickness": 1e-3, "form": "tip_angle"}
 
 
-def _beam_record(path, *, ei=2.0, zeta=0.03, delay=0.04, noise=0.01, seed=0, duration=2.0):
+def _beam_record(
+    path, *, ei=2.0, zeta=0.03, delay=0.04, noise=0.01, seed=0, duration=2.0, offset=0.0
+):
     """An .npz record of the beam: hub angle prescribed, the gauge's tip angle delayed,
-    with white noise of ``noise`` times its standard deviation."""
+    with white noise of ``noise`` times its standard deviation and ``offset`` times
+    that deviation added as the gauge's zero."""
     t = np.arange(round(duration * FS) + 1) / FS
     arm = _beam(ei, zeta)
     run = fa.simulate_prescribed(arm, t, _hub_motion, substeps=4)
     y = delayed(t, StrainGauge(0, 0.0, 1e-3, "tip_angle").raw(arm, run.q), delay)
     rng = np.random.default_rng(seed)
-    y = y + noise * np.std(y) * rng.standard_normal(y.shape)
+    y = y + noise * np.std(y) * rng.standard_normal(y.shape) + offset * np.std(y)
     np.savez(path, time=t, theta=_hub(t), y=y)
     return path
 
@@ -141,6 +145,54 @@ def test_a_scale_factor_and_a_validation_record(tmp_path):
     assert summary["validation"][0]["channels"]["tip"]["fit_percent"] > 90
 
 
+def test_a_gauges_zero_offset_per_record_is_fitted_with_the_initial_states(tmp_path):
+    """Each record's gauge reads its tip angle plus a zero of its own (+0.3 and -0.5
+    of the signal's deviation): with ``offset = "fit"`` each record's offset is a
+    nuisance unknown, fitted in training and estimated for the validation record, and
+    the rigidity is recovered; without it the offsets bias the fit."""
+    clean = StrainGauge(0, 0.0, 1e-3, "tip_angle")
+    t = np.arange(round(2.0 * FS) + 1) / FS
+    run = fa.simulate_prescribed(_beam(), t, _hub_motion, substeps=4)
+    std = float(np.std(delayed(t, clean.raw(_beam(), run.q), 0.04)))
+    train = _beam_record(tmp_path / "train.npz", seed=1, offset=0.3)
+    check = _beam_record(tmp_path / "check.npz", seed=2, offset=-0.5)
+    config = _beam_config(tmp_path, [train, check], EI_AND_DAMPING)
+    config.tables["outputs"]["tip"]["offset"] = "fit"
+    records = list(config.records)
+    records[1] = type(records[1])(**{**records[1].__dict__, "role": "validation"})
+    config = type(config)(**{**config.__dict__, "records": tuple(records)})
+    cal = fa.calibrate(config)
+    assert cal.parameters()["EI"]["value"] == pytest.approx(2.0, rel=0.01)
+    assert cal.fit.nuisance[0][-1] == pytest.approx(0.3 * std, rel=0.05)
+    for r in cal.records:
+        assert r.channels["tip"].fit_percent > 95, r.role
+    # the same records without the offsets' unknowns fit worse
+    del config.tables["outputs"]["tip"]["offset"]
+    plain = fa.calibrate(config)
+    assert plain.records[1].channels["tip"].fit_percent < 90
+
+
+def test_an_offset_is_fitted_or_absent(tmp_path):
+    path = _beam_record(tmp_path / "run.npz", duration=0.5)
+    data = {
+        "calibration": {"data": "."},
+        "arm": copy.deepcopy(BEAM_ARM),
+        "outputs": {"tip": {**GAUGE, "offset": 0.1}},
+        "parameters": EI_AND_DAMPING,
+        "records": [
+            {
+                "file": path.name,
+                "time": {"variable": "time", "unit": "s"},
+                "inputs": [{"joint": 0, "kind": "angle", "variable": "theta", "unit": "rad"}],
+                "outputs": {"tip": {"variable": "y", "unit": "rad"}},
+            }
+        ],
+    }
+    with pytest.raises(CalibrationError, match="'fit'") as err:
+        CalibrationConfig.from_dict(data, "bad.toml", tmp_path)
+    assert err.value.key == "outputs.tip.offset"
+
+
 def _joint_record(path, *, stiffness=5.0, constant=0.05, delay=0.0, noise=0.01, seed=0, n=500):
     """A one-link arm behind a flexible joint driven by a motor current: the motor's
     encoder and the joint's deflection."""
@@ -197,6 +249,63 @@ def _joint_config(tmp_path, path, parameters, deflection_delay=0.0):
         ],
     }
     return CalibrationConfig.from_dict(data, "joint.toml", tmp_path)
+
+
+def _driven_rods_config(tmp_path, joints=None):
+    """Two uniform rods (no modes), each joint driven by a motor with a rotor behind a
+    gear (stage 1 of the Quanser rig's numbers on joint 1, a 7:1 elbow)."""
+    arm = {
+        "links": [
+            {"length": 1.0, "flexural_rigidity": 1.0, "linear_density": 1.3, "n_modes": 0},
+            {"length": 0.8, "flexural_rigidity": 1.0, "linear_density": 0.7, "n_modes": 0},
+        ]
+    }
+    if joints is not None:
+        arm["joints"] = joints
+    data = {
+        "calibration": {"data": "."},
+        "arm": arm,
+        "drives": [
+            {"joint": 0, "torque_constant": 0.119, "gear_ratio": 100, "rotor_inertia": 6.28e-6},
+            {"joint": 1, "torque_constant": 0.05, "gear_ratio": 7, "rotor_inertia": 4e-4},
+        ],
+        "outputs": {"hub": {"kind": "encoder", "joint": 0}},
+        "parameters": [{"key": "drives[0].torque_constant", "bounds": [0.05, 0.2]}],
+        "records": [
+            {
+                "file": "run.npz",
+                "time": {"variable": "time", "unit": "s"},
+                "inputs": [{"joint": 0, "kind": "current", "variable": "i", "unit": "A"}],
+                "outputs": {"hub": {"variable": "theta", "unit": "rad"}},
+            }
+        ],
+    }
+    return CalibrationConfig.from_dict(data, "rods.toml", tmp_path)
+
+
+def test_a_drives_rotor_is_counted_once_through_its_gear_by_hand(tmp_path):
+    """Rotor 1 (J_r1 behind N1) on the base adds N1**2 J_r1 at theta_1; rotor 2 rides on
+    rod 1 and turns at theta_1' + N2 theta_2', T = 1/2 J_r2 (theta_1' + N2 theta_2')**2:
+    J_r2 at (theta_1, theta_1), N2 J_r2 at (theta_1, theta_2), N2**2 J_r2 at
+    (theta_2, theta_2). A rotor taken as a hub turning with rod 2 would add N2**2 J_r2
+    at all three."""
+    jr1, n1, jr2, n2 = 6.28e-6, 100.0, 4e-4, 7.0
+    q = np.array([0.3, -0.7])
+    expected = two_rigid_rods_mass_matrix(1.3, 1.0, 0.7 * 0.8, 0.8, q[1])
+    expected[0, 0] += n1**2 * jr1 + jr2
+    expected[0, 1] += n2 * jr2
+    expected[1, 0] += n2 * jr2
+    expected[1, 1] += n2**2 * jr2
+    arm = build_plant(_driven_rods_config(tmp_path)).arm
+    np.testing.assert_allclose(arm.mass_matrix(q), expected, rtol=1e-13)
+    # a rigid joint with a rotor of its own at the same gear carries both
+    rigid = {"kind": "rigid", "motor_inertia": 0.02, "gear_ratio": 7}
+    with pytest.raises(CalibrationError, match="gear ratio of 100") as err:
+        build_plant(_driven_rods_config(tmp_path, rigid))
+    assert err.value.key == "drives"
+    del rigid["motor_inertia"]  # no rotor of its own: the drive's gear is the joint's
+    arm = build_plant(_driven_rods_config(tmp_path, rigid)).arm
+    np.testing.assert_allclose(arm.mass_matrix(q), expected, rtol=1e-13)
 
 
 STIFFNESS = {"name": "k", "key": "arm.joints.stiffness", "bounds": [0.5, 50.0]}

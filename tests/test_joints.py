@@ -18,7 +18,7 @@ import flexarm as fa
 from flexarm.model import dynamics
 from flexarm.model.arrays import make_workspace
 from flexarm.model.joints import LinearJoint, MakkarFriction, NonlinearJoint
-from helpers.arms import assert_mass_matrix_and_kernels
+from helpers.arms import assert_mass_matrix_and_kernels, two_rigid_rods_mass_matrix
 
 
 def simulate(arm, x0, t_end, torque=None, n_eval=201, rtol=1e-11, atol=1e-12):
@@ -149,18 +149,6 @@ def test_coupling_matrix_is_the_papers_S():
         coupled.mass_matrix(q)[:2, :2] - rigid.mass_matrix(q[:2]), [[jm2, 0], [0, 0]], atol=1e-14
     )
     np.testing.assert_allclose(spong.mass_matrix(q)[:2, :2], rigid.mass_matrix(q[:2]), atol=1e-14)
-
-
-def two_rigid_rods_mass_matrix(m1, l1, m2, l2, theta2):
-    """The textbook mass matrix of two uniform rods on revolute joints (centres of
-    mass at mid-length, I_c = m l**2 / 12), written out by hand."""
-    lc1, lc2 = l1 / 2, l2 / 2
-    i1, i2 = m1 * l1**2 / 12, m2 * l2**2 / 12
-    c2 = math.cos(theta2)
-    m11 = m1 * lc1**2 + i1 + m2 * (l1**2 + lc2**2 + 2 * l1 * lc2 * c2) + i2
-    m12 = m2 * (lc2**2 + l1 * lc2 * c2) + i2
-    m22 = m2 * lc2**2 + i2
-    return np.array([[m11, m12], [m12, m22]])
 
 
 @pytest.mark.parametrize("ratio", [1.0, 7.0, 100.0])

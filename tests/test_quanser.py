@@ -43,10 +43,10 @@ def stage1(tmp_path_factory):
 
 
 def test_stage1_fits_its_training_runs(stage1):
-    """Reported: 76.7 % and 77.6 % (the issue's 80 % is not reached: see the README)."""
+    """Reported: 78.7 % and 81.3 % (80 % on each is not reached: see the guide)."""
     summary, _ = stage1
     fits = [r["channels"]["th12"]["fit_percent"] for r in summary["training"]]
-    assert len(fits) == 2 and min(fits) >= 76.7 - MARGIN
+    assert len(fits) == 2 and min(fits) >= 78.7 - MARGIN and max(fits) >= 81.3 - MARGIN
     for r in summary["training"] + summary["validation"]:
         c = r["channels"]["th12"]
         assert c["fit_percent"] > c["fit_percent_initial"] + 20  # the calibration helped
@@ -57,7 +57,7 @@ def test_stage1_fits_its_training_runs(stage1):
 
 def test_stage1_predicts_a_step_run_it_has_not_seen():
     """Fitted on one LQ step run, the other predicted (its initial states estimated,
-    the parameters held): reported 76.8 % and 76.4 %, the issue's 75 % met."""
+    the parameters held): reported 78.3 % and 80.6 %, the 75 % asked for met."""
     data = tomllib.loads((EXAMPLES / "stage1_steps.toml").read_text())
     for held_out in (0, 1):
         d = copy.deepcopy(data)

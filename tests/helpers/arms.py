@@ -8,6 +8,7 @@ chosen fraction of its link whatever the mode normalisation.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -20,6 +21,7 @@ __all__ = [
     "random_state",
     "random_states",
     "three_links",
+    "two_rigid_rods_mass_matrix",
     "two_short_links",
 ]
 
@@ -118,3 +120,17 @@ def assert_mass_matrix_and_kernels(
         kernel(q, dq, tau, arm.arrays, make_workspace(n), out)
         np.testing.assert_allclose(out, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
     return dq
+
+
+def two_rigid_rods_mass_matrix(
+    m1: float, l1: float, m2: float, l2: float, theta2: float
+) -> np.ndarray:
+    """The textbook mass matrix of two uniform rods on revolute joints (centres of
+    mass at mid-length, I_c = m l**2 / 12), written out by hand."""
+    lc1, lc2 = l1 / 2, l2 / 2
+    i1, i2 = m1 * l1**2 / 12, m2 * l2**2 / 12
+    c2 = math.cos(theta2)
+    m11 = m1 * lc1**2 + i1 + m2 * (l1**2 + lc2**2 + 2 * l1 * lc2 * c2) + i2
+    m12 = m2 * (lc2**2 + l1 * lc2 * c2) + i2
+    m22 = m2 * lc2**2 + i2
+    return np.array([[m11, m12], [m12, m22]])

@@ -40,6 +40,9 @@ the same mapping (:meth:`CalibrationConfig.from_dict`)::
     thickness = 0.00127
     form = "tip_angle"
     delay = "estimate"         # s, or "estimate": by cross-correlation, then fitted
+    offset = "fit"             # optional: the channel's zero offset, a constant per
+                               # record fitted with its initial states (a gauge's
+                               # bridge is not zeroed at the start of every record)
 
     [[parameters]]             # what to fit: any numeric key of arm, drives, outputs
     key = "arm.links[0].flexural_rigidity"
@@ -99,6 +102,7 @@ OUTPUT_KINDS: dict[str, type] = {
 INITIAL_STATES = ("rest", "measured", "fit")
 INTERPOLATIONS = ("zoh", "linear")
 ESTIMATE = "estimate"
+FIT = "fit"
 
 
 @dataclass(frozen=True)
@@ -279,7 +283,13 @@ def _outputs(r: ConfigReader, t: Mapping[str, Any]) -> dict[str, dict[str, Any]]
         table = r.as_table(spec, key)
         kind = r.kind(table, key, tuple(OUTPUT_KINDS))
         cls = OUTPUT_KINDS[kind]
-        params = {n: v for n, v in table.items() if n != "kind"}
+        params = {n: v for n, v in table.items() if n not in ("kind", "offset")}
+        if "offset" in table and table["offset"] != FIT:
+            r.fail(
+                f"{key}.offset",
+                f"must be {FIT!r} (a zero offset fitted per record) or absent. "
+                f"Got {table['offset']!r} instead.",
+            )
         if params.get("delay") == ESTIMATE:
             params["delay"] = 0.0
         r.build(cls, params, key)

@@ -416,8 +416,9 @@ def initial_states(predictor: Predictor, plant: Plant, k: int) -> F64 | None:
     """The initial states of record ``k`` that best replay it on ``plant`` (the
     parameters held), as MATLAB's ``compare`` estimates a validation record's initial
     conditions; None where the file does not fit initial states
-    (``initial_state = "fit"``). The replay is nearly linear in them: two
-    Gauss-Newton steps from rest, each one forward-difference Jacobian."""
+    (``initial_state = "fit"``) nor zero offsets (``offset = "fit"``, which these
+    include). The replay is nearly linear in them: two Gauss-Newton steps from rest,
+    each one forward-difference Jacobian."""
     n = predictor.n_nuisance(plant, k)
     if n == 0:
         return None

@@ -9,7 +9,10 @@ or the measured torques or currents (through the drives) driving the arm open lo
 record may be cut into segments, each started from the measured state: the
 encoders' angles, at rest (``initial_state = "rest"``) or with their measured rates
 (``"measured"``), the links straight and at rest, or with a fitted first-mode
-deflection and rate as well (``"fit"``): a long record then does not drift.
+deflection and rate as well (``"fit"``): a long record then does not drift. An
+output with ``offset = "fit"`` adds a constant per record to its channel, fitted
+with the initial states (a sensor's zero, which a logger need not reset between
+records).
 """
 
 from __future__ import annotations
@@ -28,13 +31,14 @@ from .._types import F64
 from ..errors import CalibrationError, ConfigFileError, FlexarmError, UnstableStepError
 from ..model.arm import FlexibleArm
 from ..model.drives import Drive
+from ..model.joints import RigidJoint
 from ..sensing.instruments import Encoder, Instrument, delayed
 from ..sim.open_loop import simulate_open_loop
 from ..sim.prescribed import JointMotion, motion_from_samples, simulate_prescribed
 from ..sim.results import SimulationError
 from ..sim.scenario import arm_from_tables
 from ..sim.step_check import MARGIN, stable_step
-from .config import OUTPUT_KINDS, CalibrationConfig
+from .config import FIT, OUTPUT_KINDS, CalibrationConfig
 from .records import Record
 
 __all__ = ["Plant", "Predictor", "build_plant", "check_plant"]
@@ -53,9 +57,12 @@ def build_plant(config: CalibrationConfig, values: Sequence[float] | F64 | None 
     """The plant with ``values`` (one per parameter, default their initial values)
     written into the file's tables.
 
-    A drive's rotor, reflected through its gear (``N**2 J_r``), is added on the
-    motor side of its joint: to the link's hub inertia behind a rigid joint, to the
-    joint's motor inertia behind a flexible one.
+    A drive's rotor (``rotor_inertia`` ``J_r`` behind ``gear_ratio`` ``N``) is
+    carried by its joint as the arm counts a rotor (:class:`~flexarm.model.arm.FlexibleArm`):
+    ``N**2 J_r`` added to the joint's motor inertia, the joint's gear ratio ``N``, so
+    that the rotor turns at its carrier's rate plus ``N`` times the joint's and adds
+    ``J_r`` (not ``N**2 J_r``) to its carrier. An arm without joints gets rigid ones
+    (:class:`~flexarm.model.joints.RigidJoint`) for its drives' rotors.
 
     Raises
     ------
@@ -84,7 +91,7 @@ def build_plant(config: CalibrationConfig, values: Sequence[float] | F64 | None 
             drives[joint] = Drive(**{n: v for n, v in d.items() if n != "joint"})  # type: ignore[arg-type]
         except (TypeError, ValueError) as exc:
             raise CalibrationError(config.source, f"drives[{k}]", str(exc)) from None
-    arm = _with_rotors(arm, drives)
+    arm = _with_rotors(arm, drives, config.source)
     outputs: dict[str, Instrument] = {}
     raw_outputs = tables["outputs"]
     assert isinstance(raw_outputs, dict)
@@ -92,7 +99,7 @@ def build_plant(config: CalibrationConfig, values: Sequence[float] | F64 | None 
         assert isinstance(spec, dict)
         cls = OUTPUT_KINDS[str(spec.get("kind", "encoder"))]
         try:
-            outputs[name] = cls(**{n: v for n, v in spec.items() if n != "kind"})
+            outputs[name] = cls(**{n: v for n, v in spec.items() if n not in ("kind", "offset")})
         except (TypeError, ValueError) as exc:
             raise CalibrationError(config.source, f"outputs.{name}", str(exc)) from None
     return Plant(arm, drives, outputs)
@@ -125,20 +132,29 @@ def check_plant(config: CalibrationConfig) -> Plant:
         ) from None
 
 
-def _with_rotors(arm: FlexibleArm, drives: Mapping[int, Drive]) -> FlexibleArm:
+def _with_rotors(arm: FlexibleArm, drives: Mapping[int, Drive], source: str) -> FlexibleArm:
+    """``arm`` with each drive's rotor on its joint: ``N**2 J_r`` added to the joint's
+    motor inertia at the drive's gear ratio ``N``. A joint that has a rotor of its own
+    behind another gear ratio is refused (two rotors on one joint turn at one ratio)."""
     if not any(d.rotor_inertia > 0 for d in drives.values()):
         return arm
-    if arm.joints is None:
-        links = list(arm.links)
-        for j, d in drives.items():
-            links[j] = dataclasses.replace(
-                links[j], hub_inertia=links[j].hub_inertia + d.reflected_inertia
+    joints = list(arm.joints) if arm.joints is not None else [RigidJoint()] * arm.n_links
+    for j, d in sorted(drives.items()):
+        if d.rotor_inertia == 0.0:
+            continue
+        joint = joints[j]
+        if joint.motor_inertia > 0.0 and joint.gear_ratio != d.gear_ratio:
+            raise CalibrationError(
+                source,
+                "drives",
+                f"the drive of joint {j} has a rotor behind a gear ratio of {d.gear_ratio:g}, "
+                f"and the joint a motor inertia behind {joint.gear_ratio:g}: give the joint "
+                "the drive's gear_ratio, or its rotor in one place",
             )
-        return dataclasses.replace(arm, links=links)
-    joints = list(arm.joints)
-    for j, d in drives.items():
         joints[j] = dataclasses.replace(
-            joints[j], motor_inertia=joints[j].motor_inertia + d.reflected_inertia
+            joint,
+            motor_inertia=joint.motor_inertia + d.reflected_inertia,
+            gear_ratio=d.gear_ratio,
         )
     return dataclasses.replace(arm, joints=joints)
 
@@ -193,6 +209,13 @@ class Predictor:
         self.encoders: list[dict[int, F64]] = []
         plant = check_plant(config)
         self.substeps = self._substeps(plant)
+        raw_outputs = config.tables["outputs"]
+        assert isinstance(raw_outputs, dict)
+        self.offsets = tuple(
+            name
+            for name, spec in raw_outputs.items()
+            if isinstance(spec, dict) and spec.get("offset") == FIT
+        )
         for k, rec in enumerate(self.records):
             n = rec.t.shape[0]
             per = n if s.segment <= 0 else max(2, round(s.segment / rec.dt))
@@ -254,12 +277,21 @@ class Predictor:
         }
 
     def n_nuisance(self, plant: Plant, k: int) -> int:
+        """Nuisance parameters of record ``k``: its initial states
+        (:meth:`n_initial`), then the zero offset of each of its channels with
+        ``offset = "fit"``, in :attr:`offsets` order."""
+        return self.n_initial(plant, k) + len(self._offset_channels(k))
+
+    def n_initial(self, plant: Plant, k: int) -> int:
         """Initial-state parameters of record ``k``: the first mode's deflection and
         rate of each flexible link, per segment (with ``initial_state = "fit"``)."""
         if self.config.settings.initial_state != "fit":
             return 0
         flexible = sum(1 for m in plant.arm.n_modes if m > 0)
         return 2 * flexible * len(self.segments[k])
+
+    def _offset_channels(self, k: int) -> list[str]:
+        return [name for name in self.offsets if name in self.records[k].outputs]
 
     def _initial_state(self, plant: Plant, k: int, i0: int, nuisance: F64) -> F64:
         arm, rec = plant.arm, self.records[k]
@@ -299,7 +331,8 @@ class Predictor:
         (NaN from where a segment diverged)."""
         arm, rec, s = plant.arm, self.records[k], self.config.settings
         substeps = self.for_plant(plant).substeps
-        nu = np.zeros(self.n_nuisance(plant, k)) if nuisance is None else np.asarray(nuisance)
+        n_initial = self.n_initial(plant, k)
+        nu = np.zeros(n_initial) if nuisance is None else np.asarray(nuisance)[:n_initial]
         per_segment = nu.size // max(1, len(self.segments[k]))
         q = np.full((rec.t.shape[0], arm.n_dof), np.nan)
         torque = None if self.motions[k] is not None else self._torques(plant, rec)
@@ -357,11 +390,15 @@ class Predictor:
 
     def predict(self, plant: Plant, k: int, nuisance: F64 | None = None) -> dict[str, F64]:
         """The predicted channels of record ``k`` (SI, shape (K,) each), each
-        instrument's delay applied."""
+        instrument's delay applied, and the fitted zero offsets added."""
         rec = self.records[k]
         q = self.states(plant, k, nuisance)
+        offsets = dict.fromkeys(rec.outputs, 0.0)
+        if nuisance is not None:
+            tail = np.asarray(nuisance)[self.n_initial(plant, k) :]
+            offsets.update(zip(self._offset_channels(k), (float(v) for v in tail), strict=True))
         out = {}
         for name in rec.outputs:
             inst = plant.outputs[name]
-            out[name] = delayed(rec.t, inst.raw(plant.arm, q), inst.delay)
+            out[name] = delayed(rec.t, inst.raw(plant.arm, q), inst.delay) + offsets[name]
         return out
