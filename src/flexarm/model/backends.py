@@ -182,6 +182,7 @@ class Backends:
                 packed: PackedArm = self._derived["packed"]
             except KeyError:
                 packed = self._packed()
+            entry = packed.one_state  # None for an arm too large for the stack
             try:  # one state, float64 vectors: PackedArm.forward_dynamics's first case, inline
                 if (
                     out is None
@@ -191,10 +192,10 @@ class Backends:
                     and q.ndim == 1  # type: ignore[union-attr]
                     and dq.ndim == 1  # type: ignore[union-attr]
                     and tau.ndim == 1  # type: ignore[union-attr]
-                    and packed.on_stack
+                    and entry is not None
                 ):
                     fresh = _empty(packed.n_dof)
-                    if not packed.entry(packed.buf, q, dq, tau, fresh):
+                    if not entry(packed.buf, q, dq, tau, fresh):
                         return fresh
             except (AttributeError, TypeError):  # not arrays: checked below
                 pass

@@ -239,6 +239,10 @@ class PackedArm:
         function behind the dispatcher of the dynamics (no typing of the
         arguments: float64 vectors only, checked by the caller; their layout
         checked inside, :data:`flexarm.model._buffer.STRIDED`).
+    one_state : callable or None
+        ``entry`` if ``on_stack``, else None: what the arm's fast path calls, an
+        instance slot (read in a few ns, where the class attribute ``entry`` is a
+        descriptor lookup of some 20). Not pickled (:meth:`__reduce__`).
     square : tuple of int
         ``(n_dof, n_dof)``, the shape of a mass matrix.
     tall : tuple of int
@@ -258,6 +262,7 @@ class PackedArm:
     vector: tuple[int] = field(init=False, repr=False)
     square: tuple[int, int] = field(init=False, repr=False)
     tall: tuple[int, int] = field(init=False, repr=False)
+    one_state: Any = field(init=False, repr=False)
     bases: dict[tuple[int, float], F64] = field(default_factory=dict, repr=False)
 
     MAX_BASES = 64
@@ -271,6 +276,12 @@ class PackedArm:
         object.__setattr__(self, "vector", (n,))
         object.__setattr__(self, "square", (n, n))
         object.__setattr__(self, "tall", (n + -(-scratch // n), n))
+        object.__setattr__(self, "one_state", self.entry if scratch <= STACK_FLOATS else None)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickled as its arguments (the compiled ``one_state`` is rebuilt, the
+        memo of bases left behind)."""
+        return (type(self), (self.buf, self.n_links, self.n_dof, self.tip, self.tip_distance))
 
     @classmethod
     def from_arrays(cls, arrays: ArmArrays, tip: F64 | None = None) -> PackedArm:
@@ -323,7 +334,7 @@ class PackedArm:
         try:
             if q.dtype is not _FLOAT64 or dq.dtype is not _FLOAT64 or tau.dtype is not _FLOAT64:
                 return None
-            if q.ndim == 1 and dq.ndim == 1 and tau.ndim == 1 and self.on_stack:
+            if q.ndim == 1 and dq.ndim == 1 and tau.ndim == 1 and self.one_state is not None:
                 # One state, the common case: the compiled function behind the
                 # dispatcher, called directly (the dispatcher's typing of five
                 # arrays is a fifth of a call). What that typing guarded, the
@@ -335,7 +346,7 @@ class PackedArm:
                     out.dtype is _FLOAT64 and out.shape == self.vector and out.flags.writeable
                 ):
                     return None
-                status = self.entry(self.buf, q, dq, tau, out)
+                status = self.one_state(self.buf, q, dq, tau, out)
             elif out is not None:
                 return None
             elif q.ndim == 1:  # the workspace in the output's tail, the result copied out
