@@ -18,6 +18,7 @@ import numpy as np
 from .._types import F64, I64
 from .._validation import check_int
 from ..errors import InvalidValueError
+from ..control.gravity_compensation import scratch_size
 from ..model.arrays import make_workspace
 from ..sensing.channels import channel_arrays
 from .config import EnvConfig
@@ -122,6 +123,10 @@ class ArmBatch:
             reward=np.zeros(n),
             error=np.zeros(n),
             status=np.zeros(n, dtype=np.int64),
+            angles=np.zeros((n, n_links)),
+            gravity=np.zeros(
+                (n, scratch_size(n_dof, n_links) + n_links if config.compensates_gravity else 0)
+            ),
         )
         self._scratch = [
             Scratch(
