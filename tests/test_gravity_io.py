@@ -280,11 +280,13 @@ def _rigid_two_links(gravity=None) -> fa.FlexibleArm:
 
 def _check(arm, law, theta, dt, **kwargs):
     sensor = JointSensor()
-    params = np.asarray(law.design(arm, sensor, dt, None), dtype=float)
+    rows = np.zeros((1, law_reference_size(arm)))
+    params = np.asarray(law.design(arm, sensor, dt, rows), dtype=float)
     state = np.asarray(law.initial_state(arm), dtype=float)
     reference = np.zeros(law_reference_size(arm))
     reference[:2] = theta
-    return check_sampling(arm, law, sensor, np.asarray(theta), reference, params, state, dt, **kwargs)
+    theta = np.asarray(theta, dtype=float)
+    return check_sampling(arm, law, sensor, theta, reference, params, state, dt, **kwargs)
 
 
 def law_reference_size(arm):

@@ -17,8 +17,8 @@ import numpy as np
 
 from .._types import F64, I64
 from .._validation import check_int
-from ..errors import InvalidValueError
 from ..control.gravity_compensation import scratch_size
+from ..errors import InvalidValueError
 from ..model.arrays import make_workspace
 from ..sensing.channels import channel_arrays
 from .config import EnvConfig

@@ -4,9 +4,10 @@
 period each: the action (N m) is clipped to the torque limits and held (zero-order
 hold) over ``substeps`` RK4 steps of the compiled dynamics
 (:func:`flexarm.sim.integrator.rk4_step`, or its two-link one-mode form; gravity
-in them where the arm has it), the sensed signal passes through the transport delay at substep resolution with the
-closed loop's own compiled sensor (:mod:`flexarm.sensing.channels`), then the
-observation, the tracking error and the reward are formed at the new instant.
+in them where the arm has it), the sensed signal passes through the transport
+delay at substep resolution with the closed loop's own compiled sensor
+(:mod:`flexarm.sensing.channels`), then the observation, the tracking error and
+the reward are formed at the new instant.
 With gravity compensation (``BatchState.gravity`` not empty) the holding torques
 of the posture measured at the step's start
 (:func:`flexarm.control.gravity_compensation.holding_torques`) are added to the
@@ -36,8 +37,8 @@ import math
 from typing import NamedTuple
 
 from .._compile import njit_runtime_free
-from ..control.gravity_compensation import holding_torques
 from .._types import F64, I64
+from ..control.gravity_compensation import holding_torques
 from ..model.arrays import ArmArrays, Workspace
 from ..model.dynamics._points import point_kinematics
 from ..model.dynamics._two_links import is_two_links_one_mode

@@ -4,10 +4,10 @@ A swept parameter is named by a dotted key into the scenario schema
 (:mod:`flexarm.sim.scenario`): ``"sensor.noise_std"``, ``"controller.kp"``,
 ``"arm.joints.stiffness"``, with an index into an array of tables,
 ``"arm.links[1].length"``, and with an index at the end, one item of an array of
-numbers the base scenario holds, ``"arm.gravity[1]"``. :func:`with_changes` writes a run's values into a
-copy of the base scenario; :func:`run_id` names the result by a hash of the
-whole mapping, so that the same run has the same id in every sweep and on every
-machine (the journal of a sweep is keyed by it).
+numbers the base scenario holds, ``"arm.gravity[1]"``. :func:`with_changes`
+writes a run's values into a copy of the base scenario; :func:`run_id` names the
+result by a hash of the whole mapping, so that the same run has the same id in
+every sweep and on every machine (the journal of a sweep is keyed by it).
 
 Examples
 --------
