@@ -33,6 +33,7 @@ from ._common import (
     check_out,
     figure_format,
     json_ready,
+    number,
     word_or_number,
     write_failed,
 )
@@ -52,6 +53,8 @@ _OPTION_OF_KEY = {
     "simulation.smoothing": "--smoothing",
     "simulation.feedforward": "--feedforward",
     "simulation.check_sampling": "--check-sampling",
+    "simulation.gravity_compensation": "--gravity-compensation",
+    "arm.gravity": "--gravity",
     "delay.delay": "--delay",
     "delay.method": "--delay-method",
     "delay.order": "--pade-order",
@@ -82,6 +85,34 @@ def _controller_option(text: str) -> str:
     )
 
 
+class _PairAction(argparse.Action):
+    """Two numbers (``--gravity GX GY``): one or three are an error naming the option,
+    not an unrecognised argument."""
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        if len(values) != 2:
+            parser.error(
+                f"argument {option_string}: expected 2 numbers ({' '.join(self.metavar)}). "
+                f"Got {len(values)} instead."
+            )
+        setattr(namespace, self.dest, tuple(values))
+
+
+class _Formatter(argparse.RawDescriptionHelpFormatter):
+    """The help of ``simulate``: a pair option shows its two metavariables."""
+
+    def _format_args(self, action: argparse.Action, default_metavar: str) -> str:
+        if isinstance(action, _PairAction):
+            return " ".join(action.metavar)  # type: ignore[arg-type]
+        return super()._format_args(action, default_metavar)
+
+
 _delay_option = word_or_number(DELAY_MODELS, "a number of seconds (>= 0), 'seed' or 'dispersive'")
 
 
@@ -105,6 +136,9 @@ def _overrides(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
     put("simulation.smoothing", args.smoothing)
     put("simulation.feedforward", args.feedforward)
     put("simulation.check_sampling", args.check_sampling)
+    put("simulation.gravity_compensation", args.gravity_compensation)
+    if args.gravity is not None:
+        put("arm.gravity", list(args.gravity))
     put("delay.delay", args.delay)
     put("delay.method", args.delay_method)
     put("delay.order", args.pade_order)
@@ -327,7 +361,11 @@ def add_parser(sub: Any) -> None:
     """Add ``simulate`` to the subcommands ``sub``."""
     summary = "simulate the closed loop (the paper's arm on the square by default)"
     sim = sub.add_parser(
-        "simulate", help=summary, description=_SIMULATE_DESCRIPTION, epilog=_SIMULATE_EPILOG
+        "simulate",
+        help=summary,
+        description=_SIMULATE_DESCRIPTION,
+        epilog=_SIMULATE_EPILOG,
+        formatter_class=_Formatter,
     )
     sim.add_argument("--scenario", metavar="FILE.toml", help="scenario file (TOML)")
     sim.add_argument(
@@ -413,6 +451,24 @@ def add_parser(sub: Any) -> None:
         action=argparse.BooleanOptionalAction,
         default=None,
         help="refuse a control period beyond the sampled loop's stability bound (default on)",
+    )
+    sim.add_argument(
+        "--gravity",
+        nargs="+",
+        action=_PairAction,
+        type=number(),
+        metavar=("GX", "GY"),
+        help="gravity in the plane of motion, m/s^2 in the base frame (0 -9.81: a vertical "
+        "plane with y up); overrides the scenario's [arm] gravity (default: the scenario's, "
+        "none without: a horizontal plane)",
+    )
+    sim.add_argument(
+        "--gravity-compensation",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="with gravity: add to the law's torque the holding torques of the measured "
+        "posture, its links' sag included (default: the controller's choice; on for the "
+        "built-in laws, off for your own)",
     )
     sim.add_argument("--seed", type=int, metavar="N", help="seed of the sensor noise")
     sim.add_argument("--out", metavar="DIR", help="write the results into DIR (see below)")

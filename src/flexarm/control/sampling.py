@@ -1,7 +1,10 @@
 """The sampled-data check: is a control period short enough for this loop?
 
 A controller runs at its period ``dt`` with a zero-order hold. Linearised at
-rest at the start of a run, the loop is
+rest at the start of a run (with gravity, ``FlexibleArm(gravity=...)``, about the
+posture that carries its weight at the start's joint angles,
+:meth:`flexarm.FlexibleArm.equilibrium`: its links' sag and gravity's tangent
+stiffness), the loop is
 
 .. math:: x_{k+1} = \\Phi x_k + \\Gamma \\tau_k, \\quad
           \\tau_k = D_c C_y x_k + C_c s_k, \\quad s_{k+1} = B_c C_y x_k + A_c s_k,
@@ -11,8 +14,15 @@ with ``Phi, Gamma`` the exact zero-order-hold discretisation of the open-loop ar
 measurement (the sensor's signals in the layout of
 :mod:`flexarm.control.signals`, undelayed and noise-free) and
 ``A_c, B_c, C_c, D_c`` the controller's compiled law differentiated in its
-measurement and its state (central differences). The loop is sampled-data
-stable when every eigenvalue of that matrix lies in the unit disc.
+measurement and its state (central differences). With gravity compensation
+(:mod:`flexarm.control.gravity_compensation`) the holding torques of the
+measured angles are part of the law: their derivative, the posture's static
+joint stiffness under gravity ``S = V_tt - V_td (K + V_dd)^-1 V_dt``
+(``V`` the gravity potential, ``t`` the joint angles, ``d`` the modal
+coordinates, at the posture), is added to ``D_c`` on the measured angles; on a
+rigid arm ``S`` is gravity's whole stiffness, so a compensated joint loop checks
+as the horizontal arm's. The loop is sampled-data stable when every eigenvalue
+of that matrix lies in the unit disc.
 
 For a static law (no controller state), the continuous closed loop
 ``A + B D_c C_y`` says why: a fast real pole ``lambda`` needs roughly
@@ -32,12 +42,20 @@ from numba.core.ccallback import CFunc
 from .._types import F64
 from ..errors import InvalidValueError
 from ..model.arm import FlexibleArm
+from ..model.gravity import gravity_stiffness
 from ..sensing.delays import discretize
 from ..sensing.sensors import Sensor
 from .controllers import Controller
 from .linearize import linearize, measure, rest_state
+from .signals import y_angles
 
-__all__ = ["LinearLoop", "SamplingCheck", "check_sampling", "linear_loop"]
+__all__ = [
+    "LinearLoop",
+    "SamplingCheck",
+    "check_sampling",
+    "holding_stiffness",
+    "linear_loop",
+]
 
 _TOLERANCE = 1e-6  # |z| up to 1 + this counts as marginal (rigid modes under no feedback)
 
@@ -201,6 +219,25 @@ class LinearLoop:
         return out
 
 
+def holding_stiffness(arm: FlexibleArm, q: F64) -> F64:
+    """``d tau_eq / d theta`` (N m/rad, shape (n_links, n_links)): how the holding
+    torques of gravity compensation change with the joint angles at the posture
+    ``q`` (shape (n_dof,), its links' static sag; module docstring), the Schur
+    complement of the modal block in gravity's Hessian plus the links' stiffness.
+    Zeros without gravity."""
+    n_links = arm.n_links
+    if arm.gravity is None:
+        return np.zeros((n_links, n_links))
+    h = gravity_stiffness(arm, q)
+    j = np.arange(n_links)
+    m = np.arange(n_links, int(arm.arrays.mode_start[-1]))
+    out = h[np.ix_(j, j)]
+    if m.size:
+        k = np.diag(np.asarray(arm.arrays.stiffness, dtype=float)[m]) + h[np.ix_(m, m)]
+        out = out - h[np.ix_(j, m)] @ np.linalg.solve(k, h[np.ix_(m, j)])
+    return np.asarray(out, dtype=float)
+
+
 def linear_loop(
     arm: FlexibleArm,
     controller: Controller,
@@ -209,18 +246,27 @@ def linear_loop(
     reference: F64,
     params: F64,
     state: F64,
+    gravity_compensation: bool = False,
 ) -> LinearLoop:
     """The loop linearised at rest at ``theta`` (rad), with the controller's parameters,
-    state and a reference vector."""
+    state and a reference vector; with gravity about the posture that carries its
+    weight, and ``gravity_compensation``'s holding torques in the law (module
+    docstring)."""
     n = arm.n_dof
     plant = linearize(arm, theta)
     q0 = rest_state(arm, theta)
+    if arm.gravity is not None:  # the sagging posture linearize linearised about
+        q0 = arm.equilibrium(theta).q
     h = 1e-7  # central differences: the state at rest, then +h and -h along each coordinate
     steps = np.concatenate([np.zeros((1, 2 * n)), h * np.eye(2 * n), -h * np.eye(2 * n)])
     ys = measure(arm, sensor, q0 + steps[:, :n], steps[:, n:], 1e-5)
     y0 = ys[0]
     c_y = ((ys[1 : 2 * n + 1] - ys[2 * n + 1 :]) / (2 * h)).T
     a_c, b_c, c_c, d_c = _controller_jacobians(controller, params, state, y0, reference)
+    if gravity_compensation and arm.gravity is not None:
+        ya = y_angles(arm.n_links)
+        d_c = d_c.copy()
+        d_c[:, ya : ya + arm.n_links] += holding_stiffness(arm, q0)
     return LinearLoop(plant.A, plant.B, c_y, a_c, b_c, c_c, d_c)
 
 
@@ -237,16 +283,22 @@ def check_sampling(
     params: F64,
     state: F64,
     dt: float,
+    gravity_compensation: bool = False,
 ) -> SamplingCheck:
     """Check the period ``dt`` (module docstring) at rest at ``theta`` (rad), with the
     controller's parameters, initial state and first reference vector.
 
-    The largest stable period is searched for static laws only (a law whose state
-    feeds its torque, e.g. an observer, was designed for its period).
+    With gravity the loop is linearised about the posture that carries its weight
+    at ``theta``; ``gravity_compensation`` (what :func:`flexarm.simulate` adds to the
+    law's torque) puts the holding torques' derivative in the law. The largest
+    stable period is searched for static laws only (a law whose state feeds its
+    torque, e.g. an observer, was designed for its period).
     """
     if not dt > 0:
         raise InvalidValueError(f"The 'dt' parameter of check_sampling must be > 0. Got {dt}.")
-    loop = linear_loop(arm, controller, sensor, theta, reference, params, state)
+    loop = linear_loop(
+        arm, controller, sensor, theta, reference, params, state, gravity_compensation
+    )
     radius = _radius(loop.sampled(dt))
     fastest: complex = complex("nan")
     max_period = None

@@ -17,20 +17,24 @@ Defaults
   peaks at 80 N m on the default square (at its corners), 36 N m at the 99th
   percentile, so the box holds what a good law needs with some margin;
 * a joint-rate limit of 20 rad/s (the square needs about 0.5 rad/s): beyond it
-  the arm counts as diverged.
+  the arm counts as diverged;
+* no gravity (a horizontal plane), unless the arm has it or ``gravity`` gives it,
+  and no gravity compensation: the action is the whole joint torque.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .._types import F64
-from .._validation import check_array, check_int, check_option, check_real
+from .._validation import check_array, check_bool, check_int, check_option, check_real
 from ..control.trajectories import Square, Trajectory, check_trajectory
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arm import FlexibleArm
+from ..model.gravity import check_gravity
 from ..model.plant import Plant, check_plant
 from ..sensing.delays import DelayModel
 from ..sensing.sensors import JointSensor, Sensor, check_sensor
@@ -96,6 +100,23 @@ class EnvConfig:
         environment's generator (default 0: every episode starts alike).
     elbow : {"positive", "negative"}
         Inverse-kinematics branch of the initial configuration.
+    gravity : (float, float), optional
+        Gravity in the plane of motion ``(g_x, g_y)``, m/s**2 in the base frame
+        (``(0, -9.81)``: a vertical plane with ``y`` up): the episode's arm is
+        ``arm`` with it (``dataclasses.replace(arm, gravity=gravity)``, a
+        :class:`FlexibleArm`; :mod:`flexarm.model.gravity`), integrated by the
+        same compiled dynamics as :func:`flexarm.simulate`. None (default): the
+        arm's own (none for the default arm: a horizontal plane).
+    gravity_compensation : bool
+        Add to the action, at every step, the joint torques that hold the
+        measured posture at rest against gravity, its links' sag included, as
+        :func:`flexarm.simulate` adds them to a law's torque
+        (:mod:`flexarm.control.gravity_compensation`; the measured angles: the
+        sensor's delayed, noisy encoder angles, or the collocated angles for a
+        point or tip sensor), before the torque limits clip the sum; the
+        action is then a correction about the posture's holding torques.
+        Default False: the action is the whole joint torque (an arm with
+        gravity falls under a zero action). Nothing to add without gravity.
 
     Notes
     -----
@@ -103,6 +124,8 @@ class EnvConfig:
     is ``-(tracking_weight e**2 + effort_weight sum_i (tau_i / limit_i)**2)``
     with ``e`` (m) the distance between the deflected end effector and the
     reference at ``t_k + dt``; ``-divergence_penalty`` on a diverging step.
+    ``tau`` is the torque applied: the action clipped to the limits, or with
+    ``gravity_compensation`` the action plus the holding torques, clipped.
     """
 
     arm: Plant = field(default_factory=FlexibleArm.paper)
@@ -121,9 +144,24 @@ class EnvConfig:
     initial_state: tuple[float, ...] | None = None
     initial_angle_std: float = 0.0
     elbow: str = "positive"
+    gravity: tuple[float, float] | None = None
+    gravity_compensation: bool = False
 
     def __post_init__(self) -> None:
         arm = check_plant(self.arm, _OWNER)
+        if self.gravity is not None:
+            g = check_gravity(self.gravity, _OWNER)
+            if not isinstance(arm, FlexibleArm):
+                raise InvalidTypeError(
+                    f"The 'gravity' parameter of {_OWNER} needs a FlexibleArm 'arm' (to build "
+                    f"it with gravity). Got {type(arm).__name__} instead; build the plant "
+                    "with its gravity and leave 'gravity' None."
+                )
+            if arm.gravity != g:
+                arm = dataclasses.replace(arm, gravity=g)
+                object.__setattr__(self, "arm", arm)
+            object.__setattr__(self, "gravity", g)
+        check_bool(self.gravity_compensation, "gravity_compensation", _OWNER)
         check_trajectory(self.trajectory, _OWNER)
         sensor = check_sensor(self.sensor, _OWNER)
         sensor.resolve(arm)  # the sensed point exists on this arm
@@ -172,6 +210,12 @@ class EnvConfig:
     def n_steps(self) -> int:
         """Steps per episode: ``round(episode_duration / dt)``."""
         return round(self.episode_duration / self.dt)
+
+    @property
+    def compensates_gravity(self) -> bool:
+        """Whether a step adds the holding torques (``gravity_compensation`` and an arm
+        with gravity)."""
+        return bool(self.gravity_compensation) and getattr(self.arm, "gravity", None) is not None
 
     @property
     def limits(self) -> F64:

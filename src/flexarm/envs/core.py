@@ -17,6 +17,7 @@ import numpy as np
 
 from .._types import F64, I64
 from .._validation import check_int
+from ..control.gravity_compensation import scratch_size
 from ..errors import InvalidValueError
 from ..model.arrays import make_workspace
 from ..sensing.channels import channel_arrays
@@ -122,6 +123,10 @@ class ArmBatch:
             reward=np.zeros(n),
             error=np.zeros(n),
             status=np.zeros(n, dtype=np.int64),
+            angles=np.zeros((n, n_links)),
+            gravity=np.zeros(
+                (n, scratch_size(n_dof, n_links) + n_links if config.compensates_gravity else 0)
+            ),
         )
         self._scratch = [
             Scratch(

@@ -3,10 +3,15 @@
 :func:`step_batch` advances arms ``i0 <= i < i1`` of a batch over one control
 period each: the action (N m) is clipped to the torque limits and held (zero-order
 hold) over ``substeps`` RK4 steps of the compiled dynamics
-(:func:`flexarm.sim.integrator.rk4_step`, or its two-link one-mode form), the
-sensed signal passes through the transport delay at substep resolution with the
-closed loop's own compiled sensor (:mod:`flexarm.sensing.channels`), then the
-observation, the tracking error and the reward are formed at the new instant.
+(:func:`flexarm.sim.integrator.rk4_step`, or its two-link one-mode form; gravity
+in them where the arm has it), the sensed signal passes through the transport
+delay at substep resolution with the closed loop's own compiled sensor
+(:mod:`flexarm.sensing.channels`), then the observation, the tracking error and
+the reward are formed at the new instant.
+With gravity compensation (``BatchState.gravity`` not empty) the holding torques
+of the posture measured at the step's start
+(:func:`flexarm.control.gravity_compensation.holding_torques`) are added to the
+action before the limits clip it, as the closed loop adds them to a law's torque.
 :func:`reset_batch` starts arms whose state was set (the delay line primed at
 steady state, as :func:`flexarm.simulate` does).
 
@@ -33,6 +38,7 @@ from typing import NamedTuple
 
 from .._compile import njit_runtime_free
 from .._types import F64, I64
+from ..control.gravity_compensation import holding_torques
 from ..model.arrays import ArmArrays, Workspace
 from ..model.dynamics._points import point_kinematics
 from ..model.dynamics._two_links import is_two_links_one_mode
@@ -108,6 +114,12 @@ class BatchState(NamedTuple):
     reward: (B,) the last step's reward.
     error: (B,) end-effector tracking error at instant ``k``, m.
     status: int64 (B,) :data:`RUNNING`, :data:`DIVERGED` or :data:`TRUNCATED`.
+    angles: (B, n_links) the joint angles measured at instant ``k``, rad (the
+        sensor's delayed, noisy encoder angles, unwrapped; the collocated angles
+        for a point or tip sensor).
+    gravity: (B, 2 n_dof + n_links) gravity compensation: the scratch of
+        :func:`~flexarm.control.gravity_compensation.holding_torques` (the last
+        sag found), then its torques; (B, 0): off.
     """
 
     q: F64
@@ -123,6 +135,8 @@ class BatchState(NamedTuple):
     reward: F64
     error: F64
     status: I64
+    angles: F64
+    gravity: F64
 
 
 class Scratch(NamedTuple):
@@ -158,6 +172,12 @@ def _observe(
     else:
         _channels.corrupt(sensor, False, raw, delayed)
     joint = sensor.link[0] < 0
+    angles = state.angles[i]
+    for j in range(n_links):  # what the closed loop's law and compensation are given
+        if joint:
+            angles[j] = delayed[j]
+        else:
+            angles[j] = _channels.collocated(q, dq, model, j, n_links)[0]
     obs = state.obs[i]
     for c in range(n_ch):
         v = delayed[c]
@@ -194,6 +214,8 @@ def reset_batch(
         )
         for j in range(state.tau.shape[1]):
             state.tau[i, j] = 0.0
+        for j in range(state.gravity.shape[1]):  # the compensation's sag: from straight
+            state.gravity[i, j] = 0.0
         state.cursor[i] = 0
         state.k[i] = 0
         state.reward[i] = 0.0
@@ -213,7 +235,8 @@ def step_batch(
     scratch: Scratch,
 ) -> None:  # pragma: no cover - compiled
     """One control period of arms ``i0 <= i < i1`` with ``active[i]``: hold
-    ``action[i]`` (N m, clipped to the limits), integrate, observe, reward.
+    ``action[i]`` (N m; plus the holding torques with gravity compensation; clipped
+    to the limits), integrate, observe, reward.
 
     Sets ``state.status[i]`` to :data:`DIVERGED` (the state left finite limits,
     a tip deflection or a joint rate its bound; the observation is left as it
@@ -231,14 +254,21 @@ def step_batch(
     raw = sig[0:n_ch]
     x_new = sig[2 * n_ch : sig.shape[0] - 4]
     two_links_one_mode = is_two_links_one_mode(model)
+    n_hold = state.gravity.shape[1]
+    compensate = n_hold > 0
     for i in range(i0, i1):
         if not active[i]:
             continue
         q, dq, tau = state.q[i], state.dq[i], state.tau[i]
+        hold = state.gravity[i, n_hold - n_links :]
+        if compensate:  # the holding torques of the measured posture
+            holding_torques(state.angles[i], model, state.gravity[i, : n_hold - n_links], hold)
         effort = 0.0
         for j in range(n_links):
             lim = env.limit[j]
             u = action[i, j]
+            if compensate:
+                u += hold[j]
             if u > lim:
                 u = lim
             elif u < -lim:

@@ -330,6 +330,7 @@ def _set_up(
             loop.params,
             loop.state.ctrl_state.copy(),
             s.dt,
+            gravity_compensation=use_gc,
         )
         if verdict.period_too_long:  # (a loop unstable in continuous time diverges anyway)
             raise InvalidValueError(verdict.message(_OWNER, _hubless_note(arm)))

@@ -2,11 +2,12 @@
 
 A swept parameter is named by a dotted key into the scenario schema
 (:mod:`flexarm.sim.scenario`): ``"sensor.noise_std"``, ``"controller.kp"``,
-``"arm.joints.stiffness"``, and with an index into an array of tables,
-``"arm.links[1].length"``. :func:`with_changes` writes a run's values into a
-copy of the base scenario; :func:`run_id` names the result by a hash of the
-whole mapping, so that the same run has the same id in every sweep and on every
-machine (the journal of a sweep is keyed by it).
+``"arm.joints.stiffness"``, with an index into an array of tables,
+``"arm.links[1].length"``, and with an index at the end, one item of an array of
+numbers the base scenario holds, ``"arm.gravity[1]"``. :func:`with_changes`
+writes a run's values into a copy of the base scenario; :func:`run_id` names the
+result by a hash of the whole mapping, so that the same run has the same id in
+every sweep and on every machine (the journal of a sweep is keyed by it).
 
 Examples
 --------
@@ -128,9 +129,30 @@ def with_changes(base: Mapping[str, Value], changes: Mapping[str, Value]) -> dic
                 del table[name]
         table["kind"] = copy_value(value)
     for key, parts, value in parsed:
-        if parts[-1] != "kind":
+        if isinstance(parts[-1], int):
+            _set_item(data, parts, key, value)
+        elif parts[-1] != "kind":
             table_at(data, parts, key)[str(parts[-1])] = copy_value(value)
     return data
+
+
+def _set_item(data: dict[str, Value], parts: tuple[str | int, ...], key: str, value: Value) -> None:
+    """Set item ``parts[-1]`` of the array of numbers the base holds at ``parts[:-1]``
+    (``"arm.gravity[1]"``: the vertical component of the base's gravity)."""
+    where = format_key(parts[:-1])
+    name, index = parts[-2], parts[-1]
+    assert isinstance(index, int)
+    holder = table_at(data, parts[:-1], key) if isinstance(name, str) else None
+    array = None if holder is None else holder.get(name)
+    if not isinstance(array, list) or any(isinstance(v, dict | list) for v in array):
+        raise KeyPathError(
+            key,
+            f"'{where}' is not an array of numbers in the base scenario: give the whole "
+            f"array there (e.g. [arm] gravity = [0.0, -9.81]) to sweep one of its items",
+        )
+    if index >= len(array):
+        raise KeyPathError(key, f"the array has {len(array)} items: no '{key}'")
+    array[index] = copy_value(value)
 
 
 def canonical_json(value: object) -> str:
