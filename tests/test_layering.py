@@ -95,6 +95,7 @@ WITHIN: dict[str, list[str]] = {
         "design",
         "sampling",
         "reflected",
+        "_lqg_design",
         "lqg",
         "interop",
         "custom",

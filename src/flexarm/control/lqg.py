@@ -47,10 +47,8 @@ noise if it has some, else 1 mm and 1 cm/s; rad and rad/s for encoders).
 from __future__ import annotations
 
 import dataclasses
-import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -63,9 +61,9 @@ from ..fuzzy import FuzzySystem, paper_system, workspace_size
 from ..fuzzy._kernels import evaluate_into_kernel, unpack_system_kernel
 from ..fuzzy.compiled import pack_system
 from ..model.arm import FlexibleArm
-from ..model.kinematics import lever_lengths, rigid_point
 from ..model.plant import Plant
-from ..sensing.sensors import JointSensor, PointSensor, Sensor, TipSensor
+from ..sensing.sensors import Sensor, TipSensor
+from ._lqg_design import TABLE_REFINEMENT, Geometry, design_blocks, operating_table
 from ._lqg_layout import (
     ABSOLUTE,
     FUZZY,
@@ -84,14 +82,11 @@ from ._lqg_layout import (
     LQGLayout,
     block_parts,
     operating_parts,
-    pack_block,
     pack_parameters,
     state_parts,
 )
 from .controllers import Controller, gaussian_smoothing, ringing_frequency, wrap_control_function
-from .design import kalman, lqr
-from .gravity_compensation import holding_torques, scratch_size
-from .linearize import linearize, measure
+from .linearize import linearize
 from .signals import (
     r_angles,
     r_position,
@@ -438,11 +433,11 @@ class LQG(Controller):
         pos_noise, vel_noise = self._noise(sensor)
         nx = 2 * model.n_dof
         link, distance, _ = sensor.resolve(model)
-        geometry = _Geometry(link=link, distance=distance, model=sensor.model)
+        geometry = Geometry(link=link, distance=distance, model=sensor.model)
         weights = (self.position_weight, self.velocity_weight, self.torque_weight)
         noises = (self.torque_noise, pos_noise, vel_noise)
         shoulder_points = None if shoulder is None else tuple(shoulder)
-        blocks, ny = _design_blocks(
+        blocks, ny = design_blocks(
             model, geometry, float(dt), tuple(grid), weights, noises, shoulder_points
         )
         fuzzy: list[F64] = []
@@ -470,10 +465,10 @@ class LQG(Controller):
         operating = None
         if shoulder is not None:  # the weight held by the law, on a finer grid
             fine = [
-                np.linspace(g[0], g[-1], _TABLE_REFINEMENT * (g.shape[0] - 1) + 1)
+                np.linspace(g[0], g[-1], TABLE_REFINEMENT * (g.shape[0] - 1) + 1)
                 for g in (grid, shoulder)
             ]
-            rows = _operating_table(model, geometry, tuple(fine[0]), tuple(fine[1]))
+            rows = operating_table(model, geometry, tuple(fine[0]), tuple(fine[1]))
             operating = (fine[0], fine[1], rows)
         return pack_parameters(head, grid, blocks, fuzzy, shoulder, operating)
 
@@ -489,103 +484,6 @@ _MEASUREMENT_FLOOR = 1e-2
 """The measurement noise the filter assumes on top of the sensor's own (m, m/s; rad,
 rad/s for encoders): what the linear model leaves out of the measurement (the
 unmodelled modes first)."""
-
-
-class _Geometry(NamedTuple):
-    """What a design needs of the sensor: where it is and which model it follows."""
-
-    link: int
-    distance: float
-    model: str
-
-
-def _sensor_of(geometry: _Geometry) -> Sensor:
-    if geometry.link < 0:
-        return JointSensor()
-    return PointSensor(geometry.link, geometry.distance, model=geometry.model)
-
-
-@functools.lru_cache(maxsize=64)
-def _design_blocks(
-    model: FlexibleArm,
-    geometry: _Geometry,
-    dt: float,
-    grid: tuple[float, ...],
-    weights: tuple[float, float, float],
-    noises: tuple[float, float, float],
-    shoulder: tuple[float, ...] | None = None,
-) -> tuple[list[F64], int]:
-    """Per grid point ``Phi, Gamma, C, K, M`` flattened, and the
-    measurement's size (cached: runs that share a design solve its Riccati equations
-    once). ``shoulder`` None: at ``theta_1 = 0``; else on the grid of both angles,
-    shoulder-major, about the gravity equilibrium of each posture."""
-    qp, qv, rt = weights
-    tn, pos_noise, vel_noise = noises
-    sensor = _sensor_of(geometry)
-    nx, n_links = 2 * model.n_dof, model.n_links
-    blocks = []
-    ny = 0
-    postures = [(0.0, th) for th in grid]
-    if shoulder is not None:
-        postures = [(t1, th) for t1 in shoulder for th in grid]
-    for posture in postures:
-        theta = np.array(posture)
-        meas = linearize(model, theta, sensor=sensor, rates=True).discretize(dt)
-        tip = linearize(model, theta, output="tip", rates=True)
-        ny = meas.n_outputs
-        half = ny // 2
-        q = tip.C.T @ np.diag([qp, qp, qv, qv]) @ tip.C
-        q += 1e-9 * np.trace(q) / nx * np.eye(nx)
-        reg = lqr(meas, q, rt * np.eye(n_links))
-        rn = np.diag([pos_noise**2] * half + [vel_noise**2] * half)
-        est = kalman(meas, meas.B, tn**2 * np.eye(n_links), rn)
-        blocks.append(pack_block(meas.A, meas.B, meas.C, reg.K, est.M))
-    for b in blocks:
-        b.flags.writeable = False
-    return blocks, ny
-
-
-_TABLE_REFINEMENT = 4
-"""The operating table's grid is this many times finer than the design's (the
-holding torques vary by some 100 N m over the square: interpolated on the design's
-grid they would be off by about a newton metre, a standing error of the loop)."""
-
-
-@functools.lru_cache(maxsize=16)
-def _operating_table(
-    model: FlexibleArm, geometry: _Geometry, elbow: tuple[float, ...], shoulder: tuple[float, ...]
-) -> F64:
-    """Rows (len(shoulder), len(elbow), nu + ny), shoulder-major: at each posture the
-    holding torques (N m; the compiled statics of
-    :mod:`flexarm.control.gravity_compensation`, the sag of
-    :meth:`FlexibleArm.equilibrium`) and the measurement at rest there less what the
-    law subtracts from the reference (the sensed point's sag, m; rates zero; the
-    encoders' offset, rad, for the joint sensor)."""
-    sensor = _sensor_of(geometry)
-    nu, n = model.n_links, model.n_dof
-    link, distance, _ = sensor.resolve(model)
-    ny = 4 if link >= 0 else 2 * nu
-    postures = np.array([(t1, t2) for t1 in shoulder for t2 in elbow], dtype=float)
-    q = np.zeros((postures.shape[0], n))
-    tau = np.zeros((postures.shape[0], nu))
-    scratch = np.zeros(scratch_size(n, nu))
-    for k, theta in enumerate(postures):
-        holding_torques(theta, model.arrays, scratch, tau[k])
-        q[k] = scratch[:n]
-    if model.has_flexible_joints:  # the motors ahead of their links by the springs' deflection
-        for k, theta in enumerate(postures):
-            q[k] = model.equilibrium(theta).q
-    y = measure(model, sensor, q, np.zeros_like(q))
-    y0 = np.zeros((postures.shape[0], ny))
-    if link >= 0:
-        levers = lever_lengths(model.link_lengths, link, distance)
-        rp = y_point(nu)
-        y0[:, :2] = y[:, rp : rp + 2] - rigid_point(levers, postures)[0]
-    else:
-        y0[:, :nu] = y[:, y_angles(nu) : y_angles(nu) + nu] - postures
-    rows = np.concatenate([tau, y0], axis=1).reshape(len(shoulder), len(elbow), nu + ny)
-    rows.flags.writeable = False
-    return rows
 
 
 def closed_loop_growth(
