@@ -117,7 +117,7 @@ class BatchState(NamedTuple):
     angles: (B, n_links) the joint angles measured at instant ``k``, rad (the
         sensor's delayed, noisy encoder angles, unwrapped; the collocated angles
         for a point or tip sensor).
-    gravity: (B, 2 n_dof + n_links) gravity compensation: the scratch of
+    gravity: (B, scratch_size + n_links) gravity compensation: the scratch of
         :func:`~flexarm.control.gravity_compensation.holding_torques` (the last
         sag found), then its torques; (B, 0): off.
     """

@@ -78,7 +78,7 @@ class LoopState(NamedTuple):
     signals: F64  # (2 n_ch + n_y + max(p, 1),) signal scratch
     reference: F64  # (reference_size,) a streamed reference vector (feedforward 0)
     desired: F64  # (2,) a streamed desired point
-    gravity: F64  # (2 n + N,) gravity compensation: its scratch, then its torques; (0,): off
+    gravity: F64  # (scratch_size + N,) gravity compensation: its scratch, its torques; (0,): off
 
 
 class LoopOutputs(NamedTuple):
