@@ -184,3 +184,21 @@ def test_the_gravity_design_holds_the_statics_in_its_operating_table():
 def test_the_linear_growth_on_the_elbow_schedule_refuses_an_arm_with_gravity():
     with pytest.raises(ValueError, match="'plant' parameter of closed_loop_growth"):
         closed_loop_growth(ARM, LQG(), TipSensor(), 2e-4, [1.5])
+
+
+@pytest.mark.parametrize(
+    ("args", "kwargs", "exc", "match"),
+    [
+        ((fa.FlexibleArm([fa.Link(1.0, 10.0, 1.0)]), [[1.0, 0.0]]), {}, TypeError, "'arm'"),
+        ((ARM, [[1.0, 0.0, 0.0]]), {}, ValueError, "'points'"),
+        ((ARM, [[1.0, np.nan]]), {}, ValueError, "'points'"),
+        ((ARM, [[50.0, 0.0]]), {}, ValueError, "reach|'points'"),
+        ((ARM, [[5.0, 2.0]]), {"elbow": "up"}, ValueError, "'elbow'"),
+        ((ARM, [[5.0, 2.0]]), {"tol": 0.0}, ValueError, "'tol'"),
+        ((ARM, [[5.0, 2.0]]), {"max_iter": 0}, ValueError, "'max_iter'"),
+        ((ARM, [[5.0, 2.0]]), {"max_iter": 2.5}, TypeError, "'max_iter'"),
+    ],
+)
+def test_sag_corrected_angles_names_a_bad_argument(args, kwargs, exc, match):
+    with pytest.raises(exc, match=match):
+        sag_corrected_angles(*args, **kwargs)

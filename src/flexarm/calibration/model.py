@@ -31,7 +31,7 @@ from .._types import F64
 from ..errors import CalibrationError, ConfigFileError, FlexarmError, UnstableStepError
 from ..model.arm import FlexibleArm
 from ..model.drives import Drive
-from ..model.joints import RigidJoint
+from ..model.joints import LinearJoint, NonlinearJoint, RigidJoint
 from ..sensing.instruments import Encoder, Instrument, delayed
 from ..sim.open_loop import simulate_open_loop
 from ..sim.prescribed import JointMotion, motion_from_samples, simulate_prescribed
@@ -138,7 +138,9 @@ def _with_rotors(arm: FlexibleArm, drives: Mapping[int, Drive], source: str) -> 
     behind another gear ratio is refused (two rotors on one joint turn at one ratio)."""
     if not any(d.rotor_inertia > 0 for d in drives.values()):
         return arm
-    joints = list(arm.joints) if arm.joints is not None else [RigidJoint()] * arm.n_links
+    joints: list[LinearJoint | NonlinearJoint | RigidJoint] = (
+        list(arm.joints) if arm.joints is not None else [RigidJoint()] * arm.n_links
+    )
     for j, d in sorted(drives.items()):
         if d.rotor_inertia == 0.0:
             continue
@@ -279,7 +281,7 @@ class Predictor:
     def n_nuisance(self, plant: Plant, k: int) -> int:
         """Nuisance parameters of record ``k``: its initial states
         (:meth:`n_initial`), then the zero offset of each of its channels with
-        ``offset = "fit"``, in :attr:`offsets` order."""
+        ``offset = "fit"``, in ``offsets`` order."""
         return self.n_initial(plant, k) + len(self._offset_channels(k))
 
     def n_initial(self, plant: Plant, k: int) -> int:

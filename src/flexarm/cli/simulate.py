@@ -98,7 +98,7 @@ class _PairAction(argparse.Action):
     ) -> None:
         if len(values) != 2:
             parser.error(
-                f"argument {option_string}: expected 2 numbers ({' '.join(self.metavar)}). "
+                f"argument {option_string}: expected 2 numbers ({' '.join(self.metavar or ())}). "
                 f"Got {len(values)} instead."
             )
         setattr(namespace, self.dest, tuple(values))

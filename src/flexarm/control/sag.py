@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._types import F64
-from .._validation import check_array, check_real
+from .._validation import check_array, check_int, check_option, check_real
 from ..errors import InvalidTypeError, InvalidValueError
 from ..model.arm import FlexibleArm
 from ..model.kinematics import rigid_jacobian, rigid_point
@@ -120,11 +120,9 @@ def sag_corrected_angles(
             f"The 'points' parameter of {_OWNER} must have shape (m, 2) or (2,). "
             f"Got shape {np.shape(points)} instead."
         )
-    if elbow not in ELBOWS:
-        raise InvalidValueError(
-            f"The 'elbow' parameter of {_OWNER} must be one of {ELBOWS}. Got {elbow!r} instead."
-        )
+    check_option(elbow, "elbow", _OWNER, ELBOWS)
     tol = check_real(tol, "tol", _OWNER, positive=True)
+    max_iter = check_int(max_iter, "max_iter", _OWNER, minimum=1)
     theta = np.asarray(arm.inverse_kinematics(pts, elbow=elbow), dtype=float).reshape(-1, 2)
     if arm.gravity is None:
         return theta[0] if single else theta

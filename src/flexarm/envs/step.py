@@ -102,24 +102,24 @@ class EnvArrays(NamedTuple):
 class BatchState(NamedTuple):
     """The run state of ``B`` arms (row ``i`` is arm ``i``), updated in place.
 
-    q, dq: (B, n_dof) coordinates and rates.
-    tau: (B, n_links) the torque held over the current period, N m.
-    buffer: (B, delay_steps + 1, n_ch) ring of sensed signals (exact delay).
-    cursor: int64 (B,) substeps integrated in the episode.
-    pade_x: (B, n_ch, p) Padé filter states.
-    noise: (B, rows, n_ch) standard normal draws (rows = 0: noise-free).
-    noise_row: int64 (B,) next unused row of ``noise``.
-    k: int64 (B,) control instant of the episode.
-    obs: (B, n_obs) the last observation.
-    reward: (B,) the last step's reward.
-    error: (B,) end-effector tracking error at instant ``k``, m.
-    status: int64 (B,) :data:`RUNNING`, :data:`DIVERGED` or :data:`TRUNCATED`.
-    angles: (B, n_links) the joint angles measured at instant ``k``, rad (the
-        sensor's delayed, noisy encoder angles, unwrapped; the collocated angles
-        for a point or tip sensor).
-    gravity: (B, scratch_size + n_links) gravity compensation: the scratch of
-        :func:`~flexarm.control.gravity_compensation.holding_torques` (the last
-        sag found), then its torques; (B, 0): off.
+    - ``q``, ``dq``: (B, n_dof) coordinates and rates.
+    - ``tau``: (B, n_links) the torque held over the current period, N m.
+    - ``buffer``: (B, delay_steps + 1, n_ch) ring of sensed signals (exact delay).
+    - ``cursor``: int64 (B,) substeps integrated in the episode.
+    - ``pade_x``: (B, n_ch, p) Padé filter states.
+    - ``noise``: (B, rows, n_ch) standard normal draws (rows = 0: noise-free).
+    - ``noise_row``: int64 (B,) next unused row of ``noise``.
+    - ``k``: int64 (B,) control instant of the episode.
+    - ``obs``: (B, n_obs) the last observation.
+    - ``reward``: (B,) the last step's reward.
+    - ``error``: (B,) end-effector tracking error at instant ``k``, m.
+    - ``status``: int64 (B,) :data:`RUNNING`, :data:`DIVERGED` or :data:`TRUNCATED`.
+    - ``angles``: (B, n_links) the joint angles measured at instant ``k``, rad (the sensor's
+      delayed, noisy encoder angles, unwrapped; the collocated angles for a point or tip
+      sensor).
+    - ``gravity``: (B, scratch_size + n_links) gravity compensation: the scratch of
+      :func:`~flexarm.control.gravity_compensation.holding_torques` (the last sag found),
+      then its torques; (B, 0): off.
     """
 
     q: F64

@@ -242,7 +242,7 @@ class PackedArm:
     one_state : callable or None
         ``entry`` if ``on_stack``, else None: what the arm's fast path calls, an
         instance slot (read in a few ns, where the class attribute ``entry`` is a
-        descriptor lookup of some 20). Not pickled (:meth:`__reduce__`).
+        descriptor lookup of some 20). Not pickled (``__reduce__``).
     square : tuple of int
         ``(n_dof, n_dof)``, the shape of a mass matrix.
     tall : tuple of int

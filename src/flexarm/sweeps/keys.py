@@ -143,7 +143,7 @@ def _set_item(data: dict[str, Value], parts: tuple[str | int, ...], key: str, va
     name, index = parts[-2], parts[-1]
     assert isinstance(index, int)
     holder = table_at(data, parts[:-1], key) if isinstance(name, str) else None
-    array = None if holder is None else holder.get(name)
+    array = None if holder is None or not isinstance(name, str) else holder.get(name)
     if not isinstance(array, list) or any(isinstance(v, dict | list) for v in array):
         raise KeyPathError(
             key,
